@@ -1,0 +1,1 @@
+"""jax3dc's data_pipeline stage."""

@@ -1,0 +1,49 @@
+"""The `jax3dc` command: one parser, subcommands registered by each area of the project.
+
+Each module in COMMAND_MODULES has ``register(subparsers)`` which adds its subcommands and
+sets ``func(args) -> int`` on them. Errors from bad input (Jax3dcError) are caught here once:
+one line on stderr, exit code 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from jax3dc.errors import Jax3dcError
+
+# Modules are imported lazily by name so that `jax3dc validate` does not pay for importing jax.
+COMMAND_MODULES: tuple[str, ...] = (
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="jax3dc",
+        description="One image in, a structured, articulated, simulation-ready 3D object out.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except Jax3dcError as e:
+        print(f"jax3dc {args.command}: error: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"jax3dc {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

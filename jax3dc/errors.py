@@ -1,0 +1,42 @@
+"""Typed errors. Each names the problem and where it is; the CLI catches them once."""
+
+from __future__ import annotations
+
+
+class Jax3dcError(Exception):
+    """Base of every error a user can cause with bad input.
+
+    The CLI prints ``str(error)`` on one line and exits 1.
+    """
+
+
+class StructureError(Jax3dcError):
+    """A structure document breaks a rule of SPEC §2.
+
+    ``rule`` is a short stable name of the broken rule (tests and metrics key on it);
+    ``where`` says which node / relation / field (e.g. ``"node 3 joint.axis"``).
+    """
+
+    def __init__(self, rule: str, where: str, message: str):
+        self.rule = rule
+        self.where = where
+        self.message = message
+        super().__init__(f"{where}: {message} [{rule}]" if where else f"{message} [{rule}]")
+
+
+class InputFileError(Jax3dcError):
+    """A file given to us is missing, unreadable or malformed (mesh, PNG, URDF, boxes...)."""
+
+    def __init__(self, path: str, message: str):
+        self.path = str(path)
+        self.message = message
+        super().__init__(f"{path}: {message}")
+
+
+class ProgramError(Jax3dcError):
+    """A part program is rejected or fails; ``line`` is 1-based in the program text."""
+
+    def __init__(self, line: int | None, message: str):
+        self.line = line
+        self.message = message
+        super().__init__(f"line {line}: {message}" if line is not None else message)

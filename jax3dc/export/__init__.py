@@ -1,0 +1,1 @@
+"""Exporters of a structure plus part meshes to URDF, MJCF, glTF and Blender."""

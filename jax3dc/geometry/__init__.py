@@ -1,0 +1,1 @@
+"""Per-part triangle meshes in the normalised object frame."""

@@ -1,0 +1,1 @@
+"""Part programs (SPEC §6): parsed and interpreted, never executed."""

@@ -1,0 +1,6 @@
+"""Puts the repository root on sys.path so tests import the packages without installing."""
+
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
