@@ -1,0 +1,32 @@
+"""The ``jax3dc data`` command group.
+
+Each module in SUBCOMMAND_MODULES has ``register(subparsers)`` that adds its ``jax3dc data ...``
+subcommands and sets ``func(args) -> int`` on them; add a module to the tuple to add commands.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+SUBCOMMAND_MODULES: tuple[str, ...] = (
+    "data_pipeline.convert_cli",
+)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser(
+        "data",
+        help="convert, build and inspect datasets",
+        description="Dataset commands: convert source objects (URDF, MJCF) into structure + part "
+        "meshes, and more. Run `jax3dc data SUBCOMMAND --help` for each.",
+    )
+    group = parser.add_subparsers(dest="data_command", metavar="SUBCOMMAND")
+    for name in SUBCOMMAND_MODULES:
+        importlib.import_module(name).register(group)
+
+    def usage(_args: argparse.Namespace) -> int:
+        parser.print_help()
+        return 2
+
+    parser.set_defaults(func=usage)
