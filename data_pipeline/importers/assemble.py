@@ -65,7 +65,9 @@ def assemble(
     nodes: dict[int, Node] = {}
     for link in part_links:
         source = tree.links[link]
-        family = guess_family([n for n in (source.label, source.name) if n], list(source.shape_names))
+        family = guess_family(
+            [n for n in (source.label, source.name) if n], list(source.material_names), list(source.shape_names)
+        )
         material = families.setdefault(family, len(families))
         attachment = attachments[link]
         joint = None

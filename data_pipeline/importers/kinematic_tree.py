@@ -43,7 +43,8 @@ class Link:
     name: str
     mesh: trimesh.Trimesh | None
     label: str | None = None  # semantic part name, where the source gives one
-    shape_names: tuple[str, ...] = ()  # names of its visuals / geoms / their materials
+    shape_names: tuple[str, ...] = ()  # names of its visuals / geoms
+    material_names: tuple[str, ...] = ()  # names of the materials its visuals / geoms use
 
 
 @dataclass(frozen=True)

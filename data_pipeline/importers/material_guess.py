@@ -1,10 +1,11 @@
 """Material family of an imported part, guessed from its names.
 
 Source files rarely state physical materials, so a small keyword table over the part's names
-(semantic label, link / body name, visual, geom and material names) picks a family; a part whose
-names hold no keyword gets "Other". The part's own label and link name decide first; the names
-of its visuals are used only when they all agree (a microwave door made of "glass" and "handle"
-visuals stays "Other" rather than becoming Glass).
+picks a family, in this order of trust: the part's own names (semantic label, link / body
+name); then the names of the materials its visuals / geoms use, when those with a keyword agree;
+then the names of its visuals / geoms, only when every one of them names the same family (a
+microwave door made of "glass" and "handle" visuals stays "Other" rather than becoming Glass).
+A part without any such keyword gets "Other".
 """
 
 from __future__ import annotations
@@ -34,12 +35,15 @@ def family_of_name(name: str) -> str | None:
     return None
 
 
-def guess_family(own_names: list[str], shape_names: list[str]) -> str:
-    """Family from the part's own names first, else from its shapes' names when they all agree."""
+def guess_family(own_names: list[str], material_names: list[str], shape_names: list[str]) -> str:
+    """Family from the part's own names, else its material names, else its shape names."""
     for name in own_names:
         family = family_of_name(name)
         if family:
             return family
+    named = {family_of_name(name) for name in material_names} - {None}
+    if len(named) == 1:
+        return named.pop()
     families = {family_of_name(name) for name in shape_names}
     if len(families) == 1 and None not in families:
         return families.pop()

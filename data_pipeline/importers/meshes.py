@@ -13,7 +13,7 @@ import trimesh
 
 from jax3dc.errors import InputFileError
 
-MESH_SUFFIXES = (".obj", ".stl", ".ply", ".glb", ".gltf", ".off", ".dae")
+MESH_SUFFIXES = (".obj", ".stl", ".ply", ".glb", ".gltf", ".off")
 
 
 def load_mesh_file(path: Path, referenced_by: Path, where: str) -> trimesh.Trimesh:

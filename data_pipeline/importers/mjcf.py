@@ -37,14 +37,14 @@ _J = mujoco.mjtJoint
 SKIPPED_GEOMS = {int(_G.mjGEOM_PLANE), int(_G.mjGEOM_HFIELD), int(_G.mjGEOM_SDF)}
 
 
-def _compile(path: Path) -> tuple[mujoco.MjModel, dict[str, list[str]]]:
-    """Compiled model without textures/materials, and each named body's geom + material names."""
+def _compile(path: Path) -> tuple[mujoco.MjModel, dict[str, tuple[list[str], list[str]]]]:
+    """Compiled model without textures/materials, and each named body's geom and material names."""
     try:
         spec = mujoco.MjSpec.from_file(str(path))
     except Exception as e:
         raise InputFileError(path, f"MuJoCo cannot read it: {_one_line(e)}") from None
     names = {
-        body.name: [n for geom in body.geoms for n in (geom.name, geom.material) if n]
+        body.name: ([g.name for g in body.geoms if g.name], [g.material for g in body.geoms if g.material])
         for body in spec.bodies
         if body.name
     }
@@ -115,7 +115,7 @@ def read_mjcf(path: Path, progress: bool = False) -> KinematicTree:
     """Parse an MJCF file into a :class:`KinematicTree` in metres."""
     path = Path(path)
     parse_xml(path, "mujoco")  # refuses DOCTYPE/ENTITY and names malformed lines before MuJoCo sees it
-    model, shape_names = _compile(path)
+    model, names = _compile(path)
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)  # data.qpos starts at qpos0: the pose written in the file
     warnings: list[str] = []
@@ -135,11 +135,11 @@ def read_mjcf(path: Path, progress: bool = False) -> KinematicTree:
         matrix[:3, 3] = data.geom_xpos[g]
         pieces[model.geom_bodyid[g]].append(meshes.transformed(_geom_mesh(model, g), matrix))
 
-    links = {
-        body_names[b]: Link(body_names[b], meshes.merged(pieces[b]), None,
-                            tuple(shape_names.get(model.body(b).name, ())))
-        for b in range(model.nbody)
-    }
+    links = {}
+    for b in range(model.nbody):
+        geom_names, material_names = names.get(model.body(b).name, ([], []))
+        links[body_names[b]] = Link(body_names[b], meshes.merged(pieces[b]), None,
+                                    tuple(geom_names), tuple(dict.fromkeys(material_names)))
     edges = []
     for b in range(1, model.nbody):
         parent = int(model.body_parentid[b])

@@ -22,8 +22,8 @@ def _refuse(*_args) -> None:
     raise _Forbidden
 
 
-def parse_xml(path: Path, root_tag: str) -> ET.Element:
-    """Parse ``path`` after checking it has no DOCTYPE/ENTITY and its root element is ``root_tag``."""
+def parse_xml(path: Path, root_tag: str | None = None) -> ET.Element:
+    """Parse ``path`` after checking it has no DOCTYPE/ENTITY (and, if given, its root tag)."""
     try:
         data = Path(path).read_bytes()
     except OSError as e:
@@ -42,6 +42,6 @@ def parse_xml(path: Path, root_tag: str) -> ET.Element:
             path, f"malformed XML at line {e.lineno}, column {e.offset}: {expat.errors.messages[e.code]}"
         ) from None
     root = ET.fromstring(data)
-    if root.tag != root_tag:
+    if root_tag is not None and root.tag != root_tag:
         raise InputFileError(path, f"root element is <{root.tag}>, expected <{root_tag}>")
     return root

@@ -21,14 +21,11 @@ MJCF_SCALE_NOTE = "MJCF lengths are metres"
 
 def _format_of(path: Path) -> str:
     """"urdf" or "mjcf", from the root element (suffixes are ambiguous: URDFs are XML too)."""
-    for fmt, tag in (("urdf", "robot"), ("mjcf", "mujoco")):
-        try:
-            parse_xml(path, tag)
-            return fmt
-        except InputFileError as e:
-            if "root element" not in e.message:
-                raise
-    raise InputFileError(path, "neither a URDF (<robot>) nor an MJCF (<mujoco>) file")
+    tag = parse_xml(path).tag
+    formats = {"robot": "urdf", "mujoco": "mjcf"}
+    if tag not in formats:
+        raise InputFileError(path, f"neither a URDF (<robot>) nor an MJCF (<mujoco>) file: root is <{tag}>")
+    return formats[tag]
 
 
 def find_source(path: Path) -> tuple[Path, str]:

@@ -195,16 +195,18 @@ def read_urdf(path: Path, progress: bool = False) -> KinematicTree:
     bar = tqdm(total=sum(map(len, shapes.values())), desc="meshes", unit="mesh", disable=not progress)
     links: dict[str, Link] = {}
     for name, element in link_elements.items():
-        pieces, shape_names = [], []
+        pieces, shape_names, material_names = [], [], []
         for index, shape in enumerate(shapes[name]):
             where = f"link {name!r} <{shape.tag}> #{index + 1}"
             local = _geometry(path, shape, where)
             pieces.append(meshes.transformed(local, world[name] @ _origin(path, shape, where)))
             shape_names.append(_label(shape.get("name")))
+            material = shape.find("material")
+            material_names.append("" if material is None else material.get("name") or "")
             bar.update()
         label = semantics[name][1] if name in semantics else None
-        names = tuple(dict.fromkeys(n for n in shape_names if n))
-        links[name] = Link(name, meshes.merged(pieces), label, names)
+        links[name] = Link(name, meshes.merged(pieces), label, tuple(n for n in shape_names if n),
+                           tuple(dict.fromkeys(n for n in material_names if n)))
     bar.close()
     return KinematicTree(path, "urdf", roots[0], links, edges, warnings)
 
