@@ -1,9 +1,10 @@
 """From a kinematic tree to the record pieces: structure O, part meshes, boxes and meta.
 
-The object is first turned about +Z to face -Y (SPEC §2). Parts are normalised together: the bounding box of the whole object is centred at the origin
-and its largest extent becomes 1 nu. Pivots move with the same transform and slide ranges are
-divided by the same factor; hinge ranges and axes are unchanged. ``scale`` (metres per nu) is the
-original largest extent times the metres per source unit.
+The object is first turned about +Z to face -Y (SPEC §2). Parts are then normalised together:
+the bounding box of the whole object is centred at the origin and its largest extent becomes
+1 nu. Pivots move with the same transform and slide ranges are divided by the same factor; hinge
+ranges are unchanged. ``scale`` (metres per nu) is the original largest extent times the metres
+per source unit.
 """
 
 from __future__ import annotations

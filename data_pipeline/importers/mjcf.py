@@ -6,9 +6,9 @@ the world-frame poses at the reference configuration gets all of them right. Tex
 materials are removed before compiling: only geometry is needed, and exports often name texture
 images that are not shipped.
 
-Geometry: when the model has visual-only geoms (contype = conaffinity = 0, the Infinigen-Sim and
-MuJoCo Menagerie convention for render meshes), only those are used, so that collision hulls do
-not double the surface; otherwise every geom. Planes and height fields (the floor) are skipped.
+Geometry: in a body with visual-only geoms (contype = conaffinity = 0, the Infinigen-Sim and
+MuJoCo Menagerie convention for render meshes) only those are used, so that collision hulls do
+not double the surface; in other bodies every geom. Planes and height fields (floors) are skipped.
 
 Joints: hinge and slide keep their range minus the joint's ``ref`` (the file's pose is the pose
 at ``ref``, so ranges are measured from it); unlimited hinges get [-pi, pi]; unlimited slides,
@@ -125,7 +125,8 @@ def read_mjcf(path: Path, progress: bool = False) -> KinematicTree:
         name = model.body(b).name or f"body_{b}"
         body_names.append(name if name not in body_names else f"{name}_{b}")
     visual_only = (model.geom_contype == 0) & (model.geom_conaffinity == 0)
-    use = visual_only if visual_only.any() else np.ones(model.ngeom, bool)
+    bodies_with_visuals = set(model.geom_bodyid[visual_only].tolist())
+    use = visual_only | ~np.isin(model.geom_bodyid, list(bodies_with_visuals))
     pieces: list[list[trimesh.Trimesh]] = [[] for _ in range(model.nbody)]
     for g in tqdm(range(model.ngeom), desc="geoms", unit="geom", disable=not progress):
         if not use[g] or int(model.geom_type[g]) in SKIPPED_GEOMS:
