@@ -1,0 +1,143 @@
+"""Case furniture with doors and drawers: cabinet, drawer chest, wardrobe, kitchen unit,
+nightstand, safe."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from data_pipeline.factories import kit
+from data_pipeline.factories.kit import u
+from data_pipeline.factories.writer import JointSpec, ProgramWriter
+
+
+def _shelves(w: ProgramWriter, body: int, width: float, depth: float, t: float, z_levels, material: int) -> None:
+    for z in z_levels:
+        board = w.box((width - 2 * t - 0.004, depth - t - 0.03, t), (0.0, -0.015 + t / 2, z))
+        w.part("shelf", board, material, parent=body, twin="shelf")
+
+
+def _door_pair(w, body, width, z0, z1, y_front, t, mat, handle_mat, rng, x0=None, x1=None, handle="bar"):
+    """One door, or two mirrored doors meeting in the middle, across [x0, x1]."""
+    x0 = -width / 2 if x0 is None else x0
+    x1 = width / 2 if x1 is None else x1
+    g = kit.EPS
+    opening = u(rng, 1.5, 2.0)
+    if x1 - x0 > 0.65 or rng.random() < 0.4:
+        mid = (x0 + x1) / 2
+        kit.hinged_door(w, body, x0 + g, mid - g, z0 + g, z1 - g, y_front, t, "left", mat, handle_mat, opening, handle=handle)
+        kit.hinged_door(w, body, mid + g, x1 - g, z0 + g, z1 - g, y_front, t, "right", mat, handle_mat, opening, handle=handle)
+    else:
+        side = "left" if rng.random() < 0.5 else "right"
+        kit.hinged_door(w, body, x0 + g, x1 - g, z0 + g, z1 - g, y_front, t, side, mat, handle_mat, opening, handle=handle)
+
+
+def cabinet(w: ProgramWriter, rng: np.random.Generator) -> None:
+    width, depth, height, t = u(rng, 0.45, 1.0), u(rng, 0.32, 0.55), u(rng, 0.6, 1.3), 0.018
+    mat, handle_mat = kit.wood(w, rng), kit.metal(w, rng)
+    body = w.part("body", kit.carcass(w, width, depth, height, t), mat)
+    n = int(rng.integers(1, 4))
+    _shelves(w, body, width, depth, t, [height * (i + 1) / (n + 1) for i in range(n)], mat)
+    _door_pair(w, body, width, 0.0, height, -depth / 2, t, mat, handle_mat, rng,
+               handle="bar" if rng.random() < 0.6 else "knob")
+
+
+def drawer_chest(w: ProgramWriter, rng: np.random.Generator) -> None:
+    width, depth, height, t = u(rng, 0.5, 1.2), u(rng, 0.38, 0.55), u(rng, 0.6, 1.3), 0.018
+    mat, handle_mat = kit.wood(w, rng), kit.metal(w, rng)
+    plinth = u(rng, 0.04, 0.1)
+    body = w.part("body", kit.carcass(w, width, depth, height - plinth, t, z0=plinth), mat)
+    w.part("plinth", w.box((width - 0.04, depth - 0.04, plinth), (0.0, 0.01, plinth / 2)), mat, parent=body)
+    top = w.box((width + 0.02, depth + 0.02, t), (0.0, 0.0, height + t / 2))
+    w.part("top", top, mat, parent=body)
+    rows = int(rng.integers(3, 7))
+    cols = 2 if width > 0.9 and rng.random() < 0.6 else 1
+    handle = "bar" if rng.random() < 0.6 else "knob"
+    row_h = (height - plinth) / rows
+    col_w = width / cols
+    for r in range(rows):
+        for c in range(cols):
+            x0, z0 = -width / 2 + c * col_w, plinth + r * row_h
+            kit.drawer(w, body, x0 + kit.EPS, x0 + col_w - kit.EPS, z0 + kit.EPS, z0 + row_h - kit.EPS,
+                       -depth / 2, depth - t - 0.01, t, mat, handle_mat, handle)
+
+
+def wardrobe(w: ProgramWriter, rng: np.random.Generator) -> None:
+    width, depth, height, t = u(rng, 0.9, 1.6), u(rng, 0.55, 0.65), u(rng, 1.8, 2.2), 0.02
+    mat, handle_mat, rail_mat = kit.wood(w, rng), kit.metal(w, rng), kit.metal(w, rng)
+    body = w.part("body", kit.carcass(w, width, depth, height, t), mat)
+    drawer_h = u(rng, 0.18, 0.25) if rng.random() < 0.5 else 0.0
+    rail = w.cylinder(0.012, width - 2 * t, (0.0, 0.0, height - 0.12), axis="x", segments=16)
+    w.part("hanging_rail", rail, rail_mat, parent=body)
+    w.part("shelf", w.box((width - 2 * t - 0.004, depth - t - 0.03, t), (0.0, -0.015 + t / 2, height - 0.3)),
+           mat, parent=body)
+    if drawer_h:
+        w.part("divider", w.box((width - 2 * t - 0.004, depth - t - 0.01, t), (0.0, -0.005 + t / 2, drawer_h)),
+               mat, parent=body)
+        half = width / 2
+        for x0 in (-half, 0.0):
+            kit.drawer(w, body, x0 + kit.EPS, x0 + half - kit.EPS, kit.EPS, drawer_h - kit.EPS,
+                       -depth / 2, depth - t - 0.02, t, mat, handle_mat)
+    opening = u(rng, 1.5, 2.0)
+    z0 = drawer_h
+    g = kit.EPS
+    kit.hinged_door(w, body, -width / 2 + g, -g, z0 + g, height - g, -depth / 2, t, "left", mat, handle_mat, opening)
+    kit.hinged_door(w, body, g, width / 2 - g, z0 + g, height - g, -depth / 2, t, "right", mat, handle_mat, opening)
+
+
+def kitchen_unit(w: ProgramWriter, rng: np.random.Generator) -> None:
+    width, depth, t = u(rng, 0.4, 1.2), 0.58, 0.018
+    plinth, height = 0.1, u(rng, 0.78, 0.84)
+    mat, handle_mat, top_mat = kit.wood(w, rng), kit.metal(w, rng), w.material("Stone", kit.pick(rng, (
+        "grey granite", "white quartz", "black marble")))
+    body = w.part("body", kit.carcass(w, width, depth, height - plinth, t, z0=plinth), mat)
+    w.part("plinth", w.box((width, 0.018, plinth), (0.0, -depth / 2 + 0.06, plinth / 2)), mat, parent=body)
+    w.part("countertop", w.box((width + 0.01, depth + 0.04, 0.03), (0.0, -0.02, height + 0.015)), top_mat,
+           parent=body)
+    drawer_h = u(rng, 0.13, 0.18)
+    top_of_doors = height - drawer_h
+    kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, top_of_doors + kit.EPS, height - kit.EPS,
+               -depth / 2, depth - t - 0.02, t, mat, handle_mat, twin=None)
+    _shelves(w, body, width, depth, t, [plinth + (top_of_doors - plinth) / 2], mat)
+    _door_pair(w, body, width, plinth, top_of_doors, -depth / 2, t, mat, handle_mat, rng)
+
+
+def nightstand(w: ProgramWriter, rng: np.random.Generator) -> None:
+    width, depth, t = u(rng, 0.38, 0.6), u(rng, 0.3, 0.45), 0.018
+    leg_h, box_h = u(rng, 0.08, 0.25), u(rng, 0.3, 0.5)
+    mat, handle_mat = kit.wood(w, rng), kit.metal(w, rng)
+    body = w.part("body", kit.carcass(w, width, depth, box_h, t, z0=leg_h), mat)
+    kit.legs(w, body, kit.corners(width / 2 - 0.025, depth / 2 - 0.025), leg_h, 0.0, 0.03, mat,
+             round_legs=rng.random() < 0.5)
+    n = int(rng.integers(1, 3))
+    row = box_h / n
+    handle = "knob" if rng.random() < 0.5 else "bar"
+    for i in range(n):
+        z0 = leg_h + i * row
+        kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, z0 + kit.EPS, z0 + row - kit.EPS,
+                   -depth / 2, depth - t - 0.01, t, mat, handle_mat, handle)
+
+
+def safe(w: ProgramWriter, rng: np.random.Generator) -> None:
+    width, depth, height, t = u(rng, 0.35, 0.6), u(rng, 0.35, 0.5), u(rng, 0.3, 0.7), 0.04
+    steel, dial_mat = w.material("Metal", kit.pick(rng, ("dark grey painted steel", "black steel"))), kit.metal(w, rng)
+    body = w.part("body", kit.carcass(w, width, depth, height, t), steel)
+    side = "left" if rng.random() < 0.5 else "right"
+    door_t = 0.05
+    g = kit.EPS
+    door = w.box((width - 2 * g, door_t, height - 2 * g), (0.0, -depth / 2 - door_t / 2, height / 2))
+    hinge_x = -width / 2 + g if side == "left" else width / 2 - g
+    axis = (0.0, 0.0, -1.0) if side == "left" else (0.0, 0.0, 1.0)
+    door_id = w.part("door", door, steel, parent=body,
+                     joint=JointSpec("hinge", axis, (hinge_x, -depth / 2, height / 2), (0.0, u(rng, 1.5, 1.9))))
+    y_front = -depth / 2 - door_t
+    dial_r = min(width, height) * 0.09
+    dial_x = 0.0 if width < 0.45 else (0.05 if side == "left" else -0.05)
+    dial = w.cylinder(dial_r, 0.02, (dial_x, y_front - 0.01, height * 0.62), axis="y", segments=24)
+    w.part("dial", dial, dial_mat, parent=door_id,
+           joint=JointSpec("hinge", (0.0, -1.0, 0.0), (dial_x, y_front - 0.01, height * 0.62), kit.full_turn()))
+    free = 1.0 if side == "left" else -1.0
+    hx, hz = dial_x + free * (width * 0.3), height * 0.4
+    hub = w.cylinder(0.015, 0.03, (hx, y_front - 0.015, hz), axis="y", segments=12)
+    lever = w.box((0.02, 0.015, 0.09), (hx, y_front - 0.03, hz - 0.04))
+    w.part("handle", w.combine(hub, lever), dial_mat, parent=door_id,
+           joint=JointSpec("hinge", (0.0, -1.0, 0.0), (hx, y_front - 0.015, hz), (0.0, 1.571)))
