@@ -24,6 +24,30 @@ def _inside_triangle(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray)
     return _cross(a, b, p) >= -eps and _cross(b, c, p) >= -eps and _cross(c, a, p) >= -eps
 
 
+def _segments_cross(p1, p2, q1, q2) -> bool:
+    """True when segments p1p2 and q1q2 share a point (touching counts)."""
+    d1, d2 = _cross(q1, q2, p1), _cross(q1, q2, p2)
+    d3, d4 = _cross(p1, p2, q1), _cross(p1, p2, q2)
+    if ((d1 > 0) != (d2 > 0)) and ((d3 > 0) != (d4 > 0)) and d1 * d2 != 0 and d3 * d4 != 0:
+        return True
+    def on(a, b, c):  # c collinear with ab and within its box
+        return abs(_cross(a, b, c)) < 1e-14 and min(a[0], b[0]) - 1e-14 <= c[0] <= max(a[0], b[0]) + 1e-14 \
+            and min(a[1], b[1]) - 1e-14 <= c[1] <= max(a[1], b[1]) + 1e-14
+    return on(q1, q2, p1) or on(q1, q2, p2) or on(p1, p2, q1) or on(p1, p2, q2)
+
+
+def is_simple(points: np.ndarray) -> bool:
+    """No two non-adjacent edges of the closed outline meet."""
+    n = len(points)
+    for i in range(n):
+        for j in range(i + 1, n):
+            if j == i + 1 or (i == 0 and j == n - 1):
+                continue
+            if _segments_cross(points[i], points[(i + 1) % n], points[j], points[(j + 1) % n]):
+                return False
+    return True
+
+
 def triangulate(points: np.ndarray) -> np.ndarray:
     """Triangles (index triples, counter-clockwise) covering a simple polygon.
 
@@ -39,6 +63,8 @@ def triangulate(points: np.ndarray) -> np.ndarray:
     area = signed_area(pts)
     if abs(area) < 1e-14:
         raise ValueError("the polygon has zero area")
+    if not is_simple(pts):
+        raise ValueError("the polygon is not simple (its edges cross)")
     order = list(range(n)) if area > 0 else list(range(n - 1, -1, -1))
     triangles: list[tuple[int, int, int]] = []
     guard = 0

@@ -209,28 +209,26 @@ def sweep(path: np.ndarray, profile: np.ndarray) -> Solid:
         raise ValueError("the path has two equal consecutive points")
     d = seg / lengths[:, None]
     m = len(path)
-    tangents = np.concatenate([d[:1], d[:-1] + d[1:], d[-1:]])
-    norms = np.linalg.norm(tangents, axis=1)
+    # the plane each ring lies in: across the path at the ends, the mitre (bisector) plane at bends
+    planes = np.concatenate([d[:1], d[:-1] + d[1:], d[-1:]])
+    norms = np.linalg.norm(planes, axis=1)
     if np.any(norms < 1e-9):
         raise ValueError("the path turns back on itself")
-    tangents /= norms[:, None]
-    normal = _perpendicular(tangents[0])
-    rings = []
+    planes /= norms[:, None]
+    normal = _perpendicular(d[0])
+    binormal = np.cross(d[0], normal)
     n = len(pts)
-    for i in range(m):
-        t = tangents[i]
-        normal = normal - np.dot(normal, t) * t
-        normal /= np.linalg.norm(normal)
-        binormal = np.cross(t, normal)
-        offsets = pts[:, :1] * normal + pts[:, 1:2] * binormal
-        if 0 < i < m - 1:
-            bend = d[i] - d[i - 1]
-            bn = np.linalg.norm(bend)
-            if bn > 1e-9:
-                b = bend / bn
-                stretch = 1.0 / max(float(np.dot(t, d[i])), 0.2) - 1.0
-                offsets = offsets + np.outer(offsets @ b, b) * stretch
-        rings.append(path[i] + offsets)
+    ring = path[0] + pts[:, :1] * normal + pts[:, 1:2] * binormal
+    rings = [ring]
+    for i in range(1, m):
+        # carry the previous ring along the segment direction onto this ring's plane, so each
+        # segment is an exact prism and the section never twists
+        along = float(np.dot(d[i - 1], planes[i]))
+        if along < 0.1:
+            raise ValueError("the path turns too sharply (more than about 168 degrees)")
+        shift = ((path[i] - ring) @ planes[i]) / along
+        ring = ring + shift[:, None] * d[i - 1]
+        rings.append(ring)
     verts = np.concatenate(rings)
     k = np.arange(n)
     k1 = (k + 1) % n

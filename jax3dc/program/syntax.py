@@ -91,6 +91,7 @@ class _Checker:
             self.bind(stmt.targets[0])
         elif isinstance(stmt, ast.Expr):
             if not isinstance(stmt.value, ast.Call):
+                self.expression(stmt.value)  # a forbidden construct gets its own message first
                 raise ProgramError(stmt.lineno, "a statement must be an assignment or a call such as part(...)")
             self.expression(stmt.value)
         elif isinstance(stmt, ast.For):

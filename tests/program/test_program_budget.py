@@ -1,0 +1,47 @@
+"""Execution budgets: steps, triangles and time are capped and reported with the line."""
+
+import pytest
+
+from jax3dc.errors import ProgramError
+from jax3dc.program import Budget, run_program
+
+
+def test_step_budget_stops_long_loops():
+    text = 'a = box(1)\npart(1, "x", a)\nfor i in range(5000):\n    b = i\n'
+    with pytest.raises(ProgramError) as info:
+        run_program(text, Budget(max_steps=1000))
+    assert "step budget" in info.value.message
+    assert info.value.line in (3, 4)
+    assert run_program(text, Budget(max_steps=20_000)).parts
+
+
+def test_nested_loops_hit_the_step_budget():
+    text = 'for i in range(1000):\n    for j in range(1000):\n        b = j\n'
+    with pytest.raises(ProgramError, match="step budget"):
+        run_program(text)
+
+
+def test_range_size_is_capped():
+    with pytest.raises(ProgramError, match="range"):
+        run_program("for i in range(10000000):\n    b = i\n")
+
+
+def test_triangle_budget_counts_created_meshes():
+    text = 'a = sphere(1, segments=64, rings=32)\npart(1, "ball", a)\n'
+    result = run_program(text)
+    with pytest.raises(ProgramError) as info:
+        run_program(text, Budget(max_triangles=result.triangles - 1))
+    assert info.value.line == 1 and "triangle budget" in info.value.message
+
+
+def test_array_is_refused_before_it_is_built():
+    text = 'a = sphere(1, segments=256, rings=128)\nb = linear_array(a, 1000, (1, 0, 0))\n'
+    with pytest.raises(ProgramError) as info:
+        run_program(text, Budget(max_triangles=1_000_000))
+    assert info.value.line == 2 and "triangle budget" in info.value.message
+
+
+def test_time_budget():
+    text = 'for i in range(5000):\n    a = box(1)\npart(1, "x", a)\n'
+    with pytest.raises(ProgramError, match="time budget"):
+        run_program(text, Budget(max_seconds=1e-6))
