@@ -16,7 +16,7 @@ from data_pipeline.factories.writer import ProgramWriter
 
 
 def cell_shelf(w: ProgramWriter, rng: np.random.Generator) -> None:
-    cols, rows = int(rng.integers(2, 6)), int(rng.integers(1, 6))
+    cols, rows = int(rng.integers(4, 7)), int(rng.integers(2, 6))  # >= 3 dividers: not only mirror pairs
     cell, depth = u(rng, 0.3, 0.4), u(rng, 0.3, 0.4)
     t, frame_t = 0.015, 0.04
     width = cols * cell + (cols - 1) * t + 2 * frame_t
@@ -70,13 +70,13 @@ def simple_bookcase(w: ProgramWriter, rng: np.random.Generator) -> None:
         w.part("side", w.box((t, depth, height), (x, 0.0, height / 2)), mat, parent=root, twin="side")
     w.part("top", w.box((inner, depth, t), (0.0, 0.0, height - t / 2)), mat, parent=root)
     w.part("bottom", w.box((inner, depth, t), (0.0, 0.0, 0.05 + t / 2)), mat, parent=root)
-    n = max(1, int((height - 0.1) / u(rng, 0.3, 0.38)) - 1)
+    n = max(2, int((height - 0.1) / u(rng, 0.3, 0.38)) - 1)
     levels = [0.05 + t + (height - 0.05 - 2 * t) * (i + 1) / (n + 1) for i in range(n)]
     shelf_ids = [w.part("shelf", w.box((inner, depth - 0.006, t), (0.0, -0.003, z)), mat, parent=root, twin="shelf")
                  for z in levels]
     book_h, book_w, book_d = u(rng, 0.18, 0.25), u(rng, 0.025, 0.04), depth * 0.75
     for shelf_id, z in zip(shelf_ids, levels):
-        count = int(rng.integers(0, 6))
+        count = int(rng.integers(2, 7))
         x0 = -inner / 2 + 0.02 + u(rng, 0.0, 0.2)
         for k in range(count):
             x = x0 + k * (book_w + 0.003)
