@@ -134,6 +134,9 @@ class _Run:
         kwargs = {kw.arg: self.value(kw.value) for kw in node.keywords}
         if name in _ARRAYS:
             self.check_array_size(node, fn, args, kwargs)
+        elif name == "combine":
+            incoming = sum(a.triangle_count for a in args if isinstance(a, Solid))
+            self.check_triangles(node, incoming)
         try:
             out = fn(*args, **kwargs)
         except ArgumentError as exc:
@@ -159,7 +162,10 @@ class _Run:
         copies = 1
         for c in counts if isinstance(counts, tuple) else (counts,):
             copies *= c if isinstance(c, int) and 0 < c <= MAX_COPIES else 1
-        if self.triangles + copies * mesh.triangle_count > self.budget.max_triangles:
+        self.check_triangles(node, copies * mesh.triangle_count)
+
+    def check_triangles(self, node: ast.Call, incoming: int) -> None:
+        if self.triangles + incoming > self.budget.max_triangles:
             raise ProgramError(node.lineno, f"triangle budget exceeded ({self.budget.max_triangles})")
 
 
@@ -167,7 +173,10 @@ def run_program(text: str, budget: Budget = Budget()) -> ProgramResult:
     """Check and interpret a part program; every `part(...)` call becomes one part mesh."""
     tree = parse_program(text)
     run = _Run(budget)
-    run.statements(tree.body)
+    try:
+        run.statements(tree.body)
+    except RecursionError:
+        raise ProgramError(None, "the program is nested too deeply") from None
     if not run.parts:
         raise ProgramError(None, "the program names no part (call part(id, name, mesh))")
     parts, names, materials = {}, {}, {}

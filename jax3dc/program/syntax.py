@@ -180,9 +180,11 @@ def parse_program(text: str) -> ast.Module:
         raise ProgramError(None, f"the program is longer than {MAX_PROGRAM_CHARS} characters")
     try:
         tree = ast.parse(text, mode="exec")
+        _Checker().statements(tree.body)
     except SyntaxError as exc:
         raise ProgramError(exc.lineno, f"syntax error: {exc.msg}") from None
     except ValueError as exc:  # e.g. NUL bytes
         raise ProgramError(None, f"unreadable program: {exc}") from None
-    _Checker().statements(tree.body)
+    except (RecursionError, MemoryError):
+        raise ProgramError(None, "the program is nested too deeply") from None
     return tree

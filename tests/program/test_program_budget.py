@@ -45,3 +45,20 @@ def test_time_budget():
     text = 'for i in range(5000):\n    a = box(1)\npart(1, "x", a)\n'
     with pytest.raises(ProgramError, match="time budget"):
         run_program(text, Budget(max_seconds=1e-6))
+
+
+def test_combine_is_refused_before_it_is_built():
+    text = "a = sphere(1, segments=256, rings=128)\nb = combine(" + ", ".join(["a"] * 200) + ")\n"
+    with pytest.raises(ProgramError) as info:
+        run_program(text)
+    assert info.value.line == 2 and "triangle budget" in info.value.message
+
+
+@pytest.mark.parametrize("text", [
+    "a = " + "+".join(["1"] * 100_000) + "\n",
+    "a = " + "-" * 100_000 + "1\n",
+    "a = " + "(" * 300 + "1" + ")" * 300 + "\n",
+])
+def test_deep_nesting_is_a_program_error(text):
+    with pytest.raises(ProgramError):
+        run_program(text)
