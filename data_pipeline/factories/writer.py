@@ -239,8 +239,8 @@ class ProgramWriter:
             joint = None
             if p.joint is not None:
                 j = p.joint
-                pivot = tuple(round((float(v) - centre[i]) * scale, DECIMALS) for i, v in enumerate(j.pivot))
-                rng = j.range if j.type == "hinge" else tuple(v * scale for v in j.range)
+                pivot = tuple(round(float((v - centre[i]) * scale), DECIMALS) for i, v in enumerate(j.pivot))
+                rng = j.range if j.type == "hinge" else tuple(float(v * scale) for v in j.range)
                 axis = np.asarray(j.axis, dtype=np.float64)
                 axis = tuple(float(v) for v in axis / np.linalg.norm(axis))
                 joint = Joint(j.type, axis, pivot, tuple(round(float(v), DECIMALS) for v in rng))

@@ -47,6 +47,7 @@ def check_spec_rules(s: Structure, part_ids):
             axis = np.asarray(j.axis)
             assert np.all(np.isfinite(axis)) and abs(np.linalg.norm(axis) - 1) < 1e-6
             assert np.all(np.isfinite(j.pivot))
+            assert all(type(v) is float for v in (*j.axis, *j.pivot, *j.range)), "plain floats for JSON"
             assert j.range[0] <= j.range[1]
             if j.type == "hinge":
                 assert -2 * math.pi <= j.range[0] and j.range[1] <= 2 * math.pi
