@@ -11,6 +11,7 @@ slide ranges are mapped with the same affine map.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from itertools import combinations
 from typing import Any
@@ -213,16 +214,28 @@ class ProgramWriter:
                          Arg("center", tuple(center), POINT))
 
     # ---- output ----
+    def _readable_names(self) -> dict[str, str]:
+        """The mesh each part names is called after the part (`door_3`), the rest keep `box2`."""
+        renames = {}
+        for st in self.statements:
+            if st.function == "part":
+                pid, name, mesh = (a.value for a in st.args[:3])
+                if isinstance(mesh, Ref) and mesh.name not in renames:
+                    renames[mesh.name] = f"{re.sub(r'[^0-9a-zA-Z]+', '_', name).strip('_') or 'part'}_{pid}"
+        return renames
+
     def program_text(self, shift=(0.0, 0.0, 0.0), scale: float = 1.0) -> str:
         shift = np.asarray(shift, dtype=np.float64)
+        renames = self._readable_names()
         lines = []
         for st in self.statements:
             args = []
             for a in st.args:
-                lit = _literal(a.value, a.kind, shift, scale)
+                value = Ref(renames.get(a.value.name, a.value.name)) if isinstance(a.value, Ref) else a.value
+                lit = _literal(value, a.kind, shift, scale)
                 args.append(f"{a.keyword}={lit}" if a.keyword else lit)
             call = f"{st.function}({', '.join(args)})"
-            lines.append(f"{st.target} = {call}" if st.target else call)
+            lines.append(f"{renames.get(st.target, st.target)} = {call}" if st.target else call)
         return "\n".join(lines) + "\n"
 
     def finish(self) -> Normalised:
