@@ -16,6 +16,7 @@ from jax3dc.errors import Jax3dcError
 # Modules are imported lazily by name so that `jax3dc validate` does not pay for importing jax.
 COMMAND_MODULES: tuple[str, ...] = (
     "data_pipeline.cli",
+    "jax3dc.program.cli",
 )
 
 

@@ -138,6 +138,7 @@ def box(size=1.0, center=(0, 0, 0)) -> Solid:
 
 
 def cylinder(radius=0.5, depth=1.0, center=(0, 0, 0), axis="z", segments=32) -> Solid:
+    """Cylinder of length `depth` along `axis`, centred at `center`; `segments` sides."""
     return S.frustum(_positive(radius, "radius"), _positive(radius, "radius"), _positive(depth, "depth"),
                      _vector(center, "center"), _axis(axis), _segments(segments))
 
@@ -152,12 +153,14 @@ def cone(radius1=0.5, radius2=0.0, depth=1.0, center=(0, 0, 0), axis="z", segmen
 
 
 def sphere(radius=0.5, center=(0, 0, 0), segments=32, rings=16) -> Solid:
+    """UV sphere: `segments` around the z axis, `rings` from pole to pole."""
     return S.uv_sphere(_positive(radius, "radius"), _vector(center, "center"), _segments(segments),
                        _count(rings, "rings", 3, MAX_SEGMENTS))
 
 
 def torus(major_radius=0.5, minor_radius=0.1, center=(0, 0, 0), axis="z", major_segments=32,
           minor_segments=12) -> Solid:
+    """Ring around `axis` through `center`: tube of `minor_radius` on a circle of `major_radius`."""
     major, minor = _positive(major_radius, "major_radius"), _positive(minor_radius, "minor_radius")
     if minor >= major:
         raise ArgumentError("minor_radius must be smaller than major_radius")
@@ -264,6 +267,7 @@ def mirror(mesh, plane="yz", center=(0, 0, 0)) -> Solid:
 # ---- transforms ---------------------------------------------------------------------------
 
 def translate(mesh, offset=(0, 0, 0)) -> Solid:
+    """The mesh moved by `offset` (dx, dy, dz)."""
     return S.translated(_solid(mesh, "mesh"), _vector(offset, "offset"))
 
 
@@ -284,7 +288,8 @@ def scale(mesh, factor=1.0, center=(0, 0, 0)) -> Solid:
 # ---- naming ---------------------------------------------------------------------------------
 
 def make_material(family="Other", desc="") -> Material:
-    """A material entry: `family` from the SPEC vocabulary, `desc` free text."""
+    """A material: `family` is one of Wood, Metal, Plastic, Glass, Fabric, Leather, Ceramic, Stone,
+    Rubber, Other; `desc` is free text."""
     if family not in FAMILIES:
         raise ArgumentError(f"material family must be one of {', '.join(FAMILIES)}, got {_describe(family)}")
     if not isinstance(desc, str):
