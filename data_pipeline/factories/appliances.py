@@ -16,7 +16,7 @@ def refrigerator(w: ProgramWriter, rng: np.random.Generator) -> None:
     body = w.part("body", kit.carcass(w, width, depth, height, t), shell)
     split = height * u(rng, 0.3, 0.4)
     freezer_bottom = rng.random() < 0.6
-    w.part("divider", w.box((width - 2 * t, depth - t - 0.01, t), (0.0, -0.005 - t / 2 + t / 2, split)), shell,
+    w.part("divider", w.box((width - 2 * t, depth - t - 0.01, t), (0.0, -(t + 0.01) / 2, split)), shell,
            parent=body)
     top_space = split + t / 2, height - t
     for i in range(int(rng.integers(2, 4))):
@@ -136,7 +136,8 @@ def washing_machine(w: ProgramWriter, rng: np.random.Generator) -> None:
     ring = w.torus(r, 0.03, (0.0, y_front - 0.03, cz), axis="y", major_segments=32, minor_segments=8)
     door_id = w.part("door", ring, ring_mat, parent=body,
                      joint=JointSpec("hinge", (0.0, 0.0, -1.0), (-r - 0.03, y_front, cz), (0.0, u(rng, 1.6, 2.0))))
-    w.part("window", w.cylinder(r, 0.02, (0.0, y_front - 0.03, cz), axis="y", segments=32), pane, parent=door_id)
+    w.part("window", w.cylinder(r - 0.03, 0.02, (0.0, y_front - 0.03, cz), axis="y", segments=32), pane,
+           parent=door_id)
     tray = w.box((dw, depth * 0.5, dh), (dx, y_front + depth * 0.25 - 0.005, dz))
     w.part("detergent_drawer", tray, ring_mat, parent=body,
            joint=JointSpec("slide", (0.0, -1.0, 0.0), (dx, y_front, dz),

@@ -70,8 +70,9 @@ def stool(w: ProgramWriter, rng: np.random.Generator) -> None:
             foot = ((0.7 * r + splay) * math.cos(a), (0.7 * r + splay) * math.sin(a), 0.0)
             w.part("leg", kit.rod(w, foot, top, 0.015), mat, parent=seat, twin="leg")
         ring_z = height * 0.3
-        ring_r = 0.7 * r + splay * (1 - ring_z / (height - seat_t))
-        w.part("footrest", w.torus(ring_r, 0.008, (0.0, 0.0, ring_z), minor_segments=8), metal, parent=seat)
+        leg_axis_r = 0.7 * r + splay * (1 - ring_z / (height - seat_t))  # legs' distance from the centre there
+        ring = w.torus(leg_axis_r + 0.015 + 0.008 + 0.002, 0.008, (0.0, 0.0, ring_z), minor_segments=8)
+        w.part("footrest", ring, metal, parent=seat)  # rests against the legs' outer sides
         return
     base = w.part("base", w.cylinder(r * 1.1, 0.03, (0.0, 0.0, 0.015), segments=32), metal)
     column = w.part("column", w.cylinder(0.025, height - seat_t - 0.03, (0.0, 0.0, (height - seat_t + 0.03) / 2),
@@ -119,7 +120,7 @@ def sofa(w: ProgramWriter, rng: np.random.Generator) -> None:
     frame = w.part("frame", w.box((width, depth, base_h), (0.0, 0.0, leg_h + base_h / 2)), upholstery)
     kit.legs(w, frame, kit.corners(width / 2 - 0.05, depth / 2 - 0.05), leg_h, 0.0, 0.04, leg_mat, round_legs=True)
     back_h = u(rng, 0.35, 0.5)
-    w.part("back", w.box((width, back_t, back_h), (0.0, depth / 2 - back_t / 2, leg_h + base_h + back_h / 2)),
+    w.part("back", w.box((width - 2 * arm_w, back_t, back_h), (0.0, depth / 2 - back_t / 2, leg_h + base_h + back_h / 2)),
            upholstery, parent=frame)
     arm_h = u(rng, 0.15, 0.25)
     for x in (-width / 2 + arm_w / 2, width / 2 - arm_w / 2):
@@ -172,7 +173,8 @@ def desk(w: ProgramWriter, rng: np.random.Generator) -> None:
     for i in range(n):
         z0 = 0.02 + i * row
         kit.drawer(w, pedestal, side_x - ped_w / 2 + kit.EPS, side_x + ped_w / 2 - kit.EPS, z0 + kit.EPS,
-                   z0 + row - kit.EPS, y_front, depth - 0.04 - t - 0.02, t, mat, handle_mat)
+                   z0 + row - kit.EPS, y_front, depth - 0.04 - t - 0.02, t, mat, handle_mat,
+                   (side_x - ped_w / 2 + t, side_x + ped_w / 2 - t, t, ped_h - t))
     if rng.random() < 0.5:
         tray_w = width - ped_w - 0.1 - t
         tray_x = (panel_x + (side_x - ped_w / 2 if side_x > 0 else side_x + ped_w / 2)) / 2

@@ -58,12 +58,13 @@ def toilet(w: ProgramWriter, rng: np.random.Generator) -> None:
     bowl_id = w.part("bowl", bowl, porcelain)
     back = bowl_r * stretch
     tank_w, tank_d, tank_h = u(rng, 0.36, 0.45), u(rng, 0.15, 0.2), u(rng, 0.3, 0.4)
-    tank_y = back + tank_d / 2 - 0.02
+    tank_y = back + tank_d / 2 + 0.005  # behind the seat and lid, which reach y = back
     tank = w.bevel((tank_w, tank_d, tank_h), 0.01, (0.0, tank_y, bowl_h + tank_h / 2 - 0.05))
     tank_id = w.part("tank", tank, porcelain, parent=bowl_id)
-    seat = w.scale(w.torus(bowl_r * 0.8, bowl_r * 0.2, (0.0, 0.0, bowl_h), major_segments=32, minor_segments=8),
-                   (1.0, stretch, 0.35), (0.0, 0.0, bowl_h))
-    seat_top = bowl_h + bowl_r * 0.2 * 0.35
+    seat_half = bowl_r * 0.2 * 0.35  # the torus tube flattened to 35 %
+    seat = w.scale(w.torus(bowl_r * 0.8, bowl_r * 0.2, (0.0, 0.0, bowl_h + seat_half), major_segments=32,
+                           minor_segments=8), (1.0, stretch, 0.35), (0.0, 0.0, bowl_h + seat_half))
+    seat_top = bowl_h + 2 * seat_half
     w.part("seat", seat, seat_mat, parent=bowl_id,
            joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, back - 0.02, seat_top), (0.0, 1.75)))
     lid_t = 0.015
@@ -130,7 +131,7 @@ def door(w: ProgramWriter, rng: np.random.Generator) -> None:
 def _sash(w, x0, x1, z0, z1, y, t, bar):
     frame = w.box((x1 - x0, t, z1 - z0), ((x0 + x1) / 2, y, (z0 + z1) / 2))
     hole = w.box((x1 - x0 - 2 * bar, t + 0.02, z1 - z0 - 2 * bar), ((x0 + x1) / 2, y, (z0 + z1) / 2))
-    pane = w.box((x1 - x0 - 2 * bar + 0.004, 0.006, z1 - z0 - 2 * bar + 0.004), ((x0 + x1) / 2, y, (z0 + z1) / 2))
+    pane = w.box((x1 - x0 - 2 * bar, 0.006, z1 - z0 - 2 * bar), ((x0 + x1) / 2, y, (z0 + z1) / 2))
     return w.difference(frame, hole), pane
 
 
@@ -185,14 +186,14 @@ def faucet(w: ProgramWriter, rng: np.random.Generator) -> None:
     body = w.part("body", w.combine(base, column), chrome)
     reach, drop = u(rng, 0.12, 0.22), u(rng, 0.03, 0.08)
     top = 0.02 + body_h
-    arc = [(0.0, 0.0, top - 0.02)]
+    arc = [(0.0, 0.0, top), (0.0, 0.0, top + 0.01)]  # leaves the column straight up
     for k in range(1, 8):
         a = math.pi * k / 8
         arc.append((0.0, -reach / 2 + reach / 2 * math.cos(a), top + reach / 2 * math.sin(a) * 0.6))
     arc.append((0.0, -reach, top - drop))
     spout = w.sweep(arc, pipe_r * 0.8, segments=12)
     w.part("spout", spout, chrome, parent=body,
-           joint=JointSpec("hinge", (0.0, 0.0, 1.0), (0.0, 0.0, top - 0.02), (-0.785, 0.785)))
+           joint=JointSpec("hinge", (0.0, 0.0, 1.0), (0.0, 0.0, top), (-0.785, 0.785)))
     lever_z = 0.02 + body_h * 0.7
     hub = w.cylinder(pipe_r * 0.9, 0.02, (0.0, pipe_r + 0.01, lever_z), axis="y", segments=16)
     arm = kit.rod(w, (0.0, pipe_r + 0.02, lever_z), (0.0, pipe_r + 0.02 + 0.06, lever_z + 0.03), 0.005)
@@ -209,12 +210,15 @@ def lamp(w: ProgramWriter, rng: np.random.Generator) -> None:
     p0 = (0.0, 0.0, 0.025)
     p1 = (0.0, -l1 * math.cos(a1), p0[2] + l1 * math.sin(a1))
     p2 = (0.0, p1[1] - l2 * math.cos(a2), p1[2] + l2 * math.sin(a2))
-    lower = w.part("lower_arm", kit.rod(w, p0, p1, 0.01), metal, parent=base,
+    # the lower arm stops short of the elbow, where the upper arm's hinge pin sits
+    elbow = tuple(b - 0.022 * (b - a) / l1 for a, b in zip(p0, p1))
+    lower = w.part("lower_arm", kit.rod(w, p0, elbow, 0.01), metal, parent=base,
                    joint=JointSpec("hinge", (1.0, 0.0, 0.0), p0, (-0.6, 0.6)))
-    upper = w.part("upper_arm", kit.rod(w, p1, p2, 0.008), metal, parent=lower,
+    pin = w.cylinder(0.012, 0.03, p1, axis="x", segments=12)
+    upper = w.part("upper_arm", w.combine(pin, kit.rod(w, p1, p2, 0.008)), metal, parent=lower,
                    joint=JointSpec("hinge", (1.0, 0.0, 0.0), p1, (-1.0, 1.0)))
     shade_h, shade_r = u(rng, 0.1, 0.16), u(rng, 0.06, 0.1)
-    shade = w.cone(shade_r, shade_r * 0.3, shade_h, (0.0, p2[1], p2[2] - shade_h / 2 + 0.01), segments=24)
+    shade = w.cone(shade_r, shade_r * 0.3, shade_h, (0.0, p2[1], p2[2] - shade_h / 2 - 0.008), segments=24)
     w.part("shade", shade, shade_mat, parent=upper,
            joint=JointSpec("hinge", (1.0, 0.0, 0.0), p2, (-0.8, 0.8)))
 

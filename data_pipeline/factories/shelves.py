@@ -27,9 +27,11 @@ def cell_shelf(w: ProgramWriter, rng: np.random.Generator) -> None:
         x = -width / 2 + frame_t + c * cell + (c - 0.5) * t
         w.part("divider", w.box((t, depth, height - 2 * frame_t), (x, 0.0, height / 2)), mat, parent=frame,
                twin="divider")
-    for r in range(1, rows):
+    for r in range(1, rows):  # one board per cell: the full-height dividers run between them
         z = frame_t + r * cell + (r - 0.5) * t
-        w.part("board", w.box((width - 2 * frame_t, depth, t), (0.0, 0.0, z)), mat, parent=frame, twin="board")
+        for c in range(cols):
+            x = -width / 2 + frame_t + c * (cell + t) + cell / 2
+            w.part("board", w.box((cell, depth, t), (x, 0.0, z)), mat, parent=frame, twin="board")
     bins = kit.fabric(w, rng)
     for r in range(rows):
         for c in range(cols):
@@ -68,8 +70,8 @@ def simple_bookcase(w: ProgramWriter, rng: np.random.Generator) -> None:
     root = w.part("back_panel", w.box((inner, 0.006, height - 0.02), (0.0, depth / 2 - 0.003, height / 2)), mat)
     for x in (-width / 2 + t / 2, width / 2 - t / 2):
         w.part("side", w.box((t, depth, height), (x, 0.0, height / 2)), mat, parent=root, twin="side")
-    w.part("top", w.box((inner, depth, t), (0.0, 0.0, height - t / 2)), mat, parent=root)
-    w.part("bottom", w.box((inner, depth, t), (0.0, 0.0, 0.05 + t / 2)), mat, parent=root)
+    w.part("top", w.box((inner, depth - 0.006, t), (0.0, -0.003, height - t / 2)), mat, parent=root)
+    w.part("bottom", w.box((inner, depth - 0.006, t), (0.0, -0.003, 0.05 + t / 2)), mat, parent=root)
     n = max(2, int((height - 0.1) / u(rng, 0.3, 0.38)) - 1)
     levels = [0.05 + t + (height - 0.05 - 2 * t) * (i + 1) / (n + 1) for i in range(n)]
     shelf_ids = [w.part("shelf", w.box((inner, depth - 0.006, t), (0.0, -0.003, z)), mat, parent=root, twin="shelf")
@@ -94,8 +96,13 @@ def triangle_shelf(w: ProgramWriter, rng: np.random.Generator) -> None:
     profile = [(0.0, half), (-half, 0.0), (half, 0.0)]
     zs = [0.03 + (height - 0.06) * i / (levels - 1) for i in range(levels)]
     bottom = w.part("board", w.extrude(profile, t, (0.0, -half / 2, zs[0])), mat)
-    for x, y in ((0.0, half / 2 - 0.02), (-half + 0.03, -half / 2 + post_r), (half - 0.03, -half / 2 + post_r)):
-        w.part("post", w.cylinder(post_r, height, (x, y, height / 2), segments=12), post_mat, parent=bottom,
-               twin="post")
+    # a post just outside each corner of the boards, touching it
+    corners = np.array(profile) + (0.0, -half / 2)
+    centre = corners.mean(axis=0)
+    for corner in corners:
+        out = (corner - centre) / np.linalg.norm(corner - centre)
+        x, y = corner + out * post_r
+        w.part("post", w.cylinder(post_r, height, (float(x), float(y), height / 2), segments=12), post_mat,
+               parent=bottom, twin="post")
     for z in zs[1:]:
         w.part("board", w.extrude(profile, t, (0.0, -half / 2, z)), mat, parent=bottom, twin="board")

@@ -58,7 +58,8 @@ def drawer_chest(w: ProgramWriter, rng: np.random.Generator) -> None:
         for c in range(cols):
             x0, z0 = -width / 2 + c * col_w, plinth + r * row_h
             kit.drawer(w, body, x0 + kit.EPS, x0 + col_w - kit.EPS, z0 + kit.EPS, z0 + row_h - kit.EPS,
-                       -depth / 2, depth - t - 0.01, t, mat, handle_mat, handle)
+                       -depth / 2, depth - t - 0.01, t, mat, handle_mat,
+                       (-width / 2 + t, width / 2 - t, plinth + t, height - t), handle)
 
 
 def wardrobe(w: ProgramWriter, rng: np.random.Generator) -> None:
@@ -71,12 +72,13 @@ def wardrobe(w: ProgramWriter, rng: np.random.Generator) -> None:
     w.part("shelf", w.box((width - 2 * t - 0.004, depth - t - 0.03, t), (0.0, -0.015 + t / 2, height - 0.3)),
            mat, parent=body)
     if drawer_h:
-        w.part("divider", w.box((width - 2 * t - 0.004, depth - t - 0.01, t), (0.0, -0.005 + t / 2, drawer_h)),
+        w.part("divider", w.box((width - 2 * t - 0.004, depth - t - 0.01, t), (0.0, -(t + 0.01) / 2, drawer_h)),
                mat, parent=body)
         half = width / 2
         for x0 in (-half, 0.0):
             kit.drawer(w, body, x0 + kit.EPS, x0 + half - kit.EPS, kit.EPS, drawer_h - kit.EPS,
-                       -depth / 2, depth - t - 0.02, t, mat, handle_mat)
+                       -depth / 2, depth - t - 0.02, t, mat, handle_mat,
+                       (-width / 2 + t, width / 2 - t, t, drawer_h - t / 2))
     opening = u(rng, 1.5, 2.0)
     z0 = drawer_h
     g = kit.EPS
@@ -96,7 +98,8 @@ def kitchen_unit(w: ProgramWriter, rng: np.random.Generator) -> None:
     drawer_h = u(rng, 0.13, 0.18)
     top_of_doors = height - drawer_h
     kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, top_of_doors + kit.EPS, height - kit.EPS,
-               -depth / 2, depth - t - 0.02, t, mat, handle_mat, twin=None)
+               -depth / 2, depth - t - 0.02, t, mat, handle_mat,
+               (-width / 2 + t, width / 2 - t, plinth + t, height - t), twin=None)
     _shelves(w, body, width, depth, t, [plinth + (top_of_doors - plinth) / 2], mat)
     _door_pair(w, body, width, plinth, top_of_doors, -depth / 2, t, mat, handle_mat, rng)
 
@@ -114,7 +117,8 @@ def nightstand(w: ProgramWriter, rng: np.random.Generator) -> None:
     for i in range(n):
         z0 = leg_h + i * row
         kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, z0 + kit.EPS, z0 + row - kit.EPS,
-                   -depth / 2, depth - t - 0.01, t, mat, handle_mat, handle)
+                   -depth / 2, depth - t - 0.01, t, mat, handle_mat,
+                   (-width / 2 + t, width / 2 - t, leg_h + t, leg_h + box_h - t), handle)
 
 
 def safe(w: ProgramWriter, rng: np.random.Generator) -> None:
