@@ -1,0 +1,127 @@
+"""Reading reference and prediction JSONL files into canonical `Case`s.
+
+Reference lines: ``{"key": ..., "structure": {...}, "boxes": {...}}``.
+Prediction lines: ``{"key": ..., "text": "<raw model output>"}`` or ``{"key": ..., "structure": {...}}``.
+
+A prediction is validated against the reference's part ids (they coincide because both sides read
+the same segmentation map) and both sides are canonicalised with the reference boxes. A missing
+prediction, or one that breaks a rule of SPEC §2, becomes a parse failure carrying the rule name;
+a malformed *file* (bad JSON line, missing key, invalid reference) is an InputFileError.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable, Iterator, Mapping
+
+from eval.metrics.score import Case
+from jax3dc.errors import InputFileError, StructureError
+from jax3dc.structure.schema import Box, Structure
+
+MISSING_RULE = "missing"
+
+# Chat-template end markers a generation may still carry, and a Markdown code fence around JSON.
+_END_MARKERS = re.compile(r"(<\|im_end\|>|<\|endoftext\|>)\s*$")
+_FENCE = re.compile(r"^```(?:json)?\s*\n?(.*?)\n?```$", re.DOTALL)
+
+
+@dataclass(frozen=True)
+class Reference:
+    key: str
+    structure: Structure  # canonical
+    boxes: dict[int, Box]
+
+
+def read_jsonl(path: str | Path) -> Iterator[tuple[int, dict[str, Any]]]:
+    """(line number, object) for every non-blank line; each must be a JSON object with a key."""
+    path = Path(path)
+    try:
+        handle = path.open(encoding="utf-8")
+    except OSError as e:
+        raise InputFileError(path, f"cannot read: {e.strerror or e}") from None
+    with handle:
+        for number, line in enumerate(handle, start=1):
+            if not line.strip():
+                continue
+            try:
+                item = json.loads(line)
+            except json.JSONDecodeError as e:
+                raise InputFileError(path, f"line {number}: not JSON ({e.msg})") from None
+            if not isinstance(item, dict) or not isinstance(item.get("key"), str):
+                raise InputFileError(path, f'line {number}: expected an object with a string "key"')
+            yield number, item
+
+
+def load_references(path: str | Path) -> list[Reference]:
+    """Parse, validate and canonicalise every reference line (invalid references are an error)."""
+    from jax3dc.structure import boxes_from_dict, canonicalize, parse_structure
+
+    refs: list[Reference] = []
+    seen: set[str] = set()
+    for number, item in read_jsonl(path):
+        key = item["key"]
+        where = f"line {number} (key {key!r})"
+        if key in seen:
+            raise InputFileError(path, f"{where}: duplicate key")
+        seen.add(key)
+        if not isinstance(item.get("structure"), dict) or not isinstance(item.get("boxes"), dict):
+            raise InputFileError(path, f'{where}: a reference needs "structure" and "boxes" objects')
+        try:
+            boxes = boxes_from_dict(item["boxes"])
+            structure = parse_structure(item["structure"])
+        except StructureError as e:
+            raise InputFileError(path, f"{where}: invalid reference: {e}") from None
+        missing = sorted(set(structure.nodes) - set(boxes))
+        if missing:
+            raise InputFileError(path, f"{where}: no box for parts {missing}")
+        refs.append(Reference(key, canonicalize(structure, boxes), boxes))
+    return refs
+
+
+def load_predictions(path: str | Path) -> dict[str, Any]:
+    """Key -> raw text (str) or structure document (dict) of every prediction line."""
+    preds: dict[str, Any] = {}
+    for number, item in read_jsonl(path):
+        key = item["key"]
+        if key in preds:
+            raise InputFileError(path, f"line {number} (key {key!r}): duplicate key")
+        doc = item.get("structure", item.get("text"))
+        if not isinstance(doc, (str, dict)):
+            raise InputFileError(path, f'line {number} (key {key!r}): a prediction needs "text" or "structure"')
+        preds[key] = doc
+    return preds
+
+
+def json_text(raw: str) -> str:
+    """The JSON document in a raw generation: end-of-turn markers and a code fence removed."""
+    text = _END_MARKERS.sub("", raw.strip()).strip()
+    fenced = _FENCE.match(text)
+    return fenced.group(1).strip() if fenced else text
+
+
+def parse_prediction(doc: str | Mapping[str, Any], ref: Reference) -> Structure:
+    """Validate a prediction against the reference part ids and canonicalise it (StructureError)."""
+    from jax3dc.structure import canonicalize, parse_structure
+
+    source = json_text(doc) if isinstance(doc, str) else dict(doc)
+    return canonicalize(parse_structure(source, ref.structure.nodes.keys()), ref.boxes)
+
+
+def build_cases(refs: Iterable[Reference], preds: Mapping[str, Any]) -> list[Case]:
+    """One case per reference, in reference order; predictions without a reference are ignored."""
+    cases = []
+    for ref in refs:
+        centroids = {i: b.centroid for i, b in ref.boxes.items()}
+        if ref.key not in preds:
+            cases.append(Case(ref.key, ref.structure, centroids, None, MISSING_RULE, "no prediction"))
+            continue
+        try:
+            pred = parse_prediction(preds[ref.key], ref)
+        except StructureError as e:
+            cases.append(Case(ref.key, ref.structure, centroids, None, e.rule, str(e)))
+            continue
+        cases.append(Case(ref.key, ref.structure, centroids, pred))
+    return cases
