@@ -8,6 +8,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import trimesh
 
 from jax3dc.errors import ProgramError
@@ -23,6 +24,8 @@ DEFAULT_MAX_TRIANGLES = 2_000_000
 DEFAULT_MAX_STEPS = 100_000
 """Limit on executed statements, loop iterations included."""
 MAX_RANGE = 10_000
+MAX_COORDINATE = 1e9
+"""Meshes whose vertices leave +-MAX_COORDINATE (e.g. after repeated scaling) are refused."""
 
 
 @dataclass(frozen=True)
@@ -142,6 +145,8 @@ class _Run:
         except ArgumentError as exc:
             raise ProgramError(node.lineno, f"{name}(): {exc}") from None
         if isinstance(out, Solid):
+            if len(out.vertices) and not np.abs(out.vertices).max() <= MAX_COORDINATE:
+                raise ProgramError(node.lineno, f"{name}(): coordinates beyond +-{MAX_COORDINATE:g}")
             self.triangles += out.triangle_count
             if self.triangles > self.budget.max_triangles:
                 raise ProgramError(node.lineno, f"triangle budget exceeded ({self.budget.max_triangles})")

@@ -21,6 +21,10 @@ from jax3dc.structure.schema import FAMILIES, Material
 MIN_SEGMENTS = 3
 MAX_SEGMENTS = 256
 MAX_COPIES = 1000
+MAX_MAGNITUDE = 1e6
+"""Largest absolute number a function accepts (keeps every volume and coordinate finite)."""
+MIN_LENGTH = 1e-9
+"""Smallest positive length (radius, depth, size) a function accepts."""
 
 
 class ArgumentError(ValueError):
@@ -42,14 +46,14 @@ class PartCall:
 def _number(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ArgumentError(f"{what} must be a number, got {_describe(value)}")
-    if not math.isfinite(value):
-        raise ArgumentError(f"{what} must be finite")
+    if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
+        raise ArgumentError(f"{what} must be a finite number within +-{MAX_MAGNITUDE:g}")
     return float(value)
 
 
 def _positive(value: Any, what: str) -> float:
     x = _number(value, what)
-    if x <= 0:
+    if x < MIN_LENGTH:
         raise ArgumentError(f"{what} must be > 0, got {x:g}")
     return x
 
@@ -75,7 +79,7 @@ def _size(value: Any, what: str) -> np.ndarray:
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         value = (value, value, value)
     size = _vector(value, what)
-    if np.any(size <= 0):
+    if np.any(size < MIN_LENGTH):
         raise ArgumentError(f"{what} must be > 0 in every direction")
     return size
 
