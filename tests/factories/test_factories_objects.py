@@ -234,3 +234,27 @@ def test_generation_is_fast():
             generate_object(category, seed)
     mean = (time.perf_counter() - start) / (2 * len(CATEGORIES))
     assert mean < 0.1, f"{mean * 1000:.1f} ms per object"
+
+
+def test_identical_across_processes_and_hash_seeds():
+    """Nothing depends on Python's per-process hash seed (sets, dict order of str keys)."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import hashlib, json, dataclasses\n"
+            "from data_pipeline.factories import FACTORIES, generate_object\n"
+            "h = hashlib.sha256()\n"
+            "for c in sorted(FACTORIES):\n"
+            "    g = generate_object(c, 3)\n"
+            "    h.update(g.program_text.encode())\n"
+            "    h.update(json.dumps(dataclasses.asdict(g.structure), sort_keys=True, default=str).encode())\n"
+            "print(h.hexdigest())\n")
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    digests = set()
+    for hash_seed in ("1", "12345"):
+        env = dict(os.environ, PYTHONHASHSEED=hash_seed, PYTHONPATH=root)
+        out = subprocess.run([sys.executable, "-c", code], env=env, cwd=root, capture_output=True, text=True,
+                             check=True)
+        digests.add(out.stdout.strip())
+    assert len(digests) == 1
