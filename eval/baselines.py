@@ -9,11 +9,13 @@
 Heuristic rules (normalised frame: +Z up, front facing -Y; tolerances in nu):
 1. Parts are ranked by volume, largest first (ties: smallest id). A part's parent is chosen among
    higher-ranked parts, so the result is always a forest: the smallest box that contains it
-   (within CONTAIN_TOL); else the part it touches (gap <= TOUCH_TOL) over the largest contact area;
-   else it starts an object of its own (a root), which is how separate objects of a scene arise.
+   (within CONTAIN_TOL); else, of the parts it touches (gap <= TOUCH_TOL), the nearest (gap to
+   1e-3 nu), then the one with the largest contact area; else it starts an object of its own (a
+   root), which is how separate objects of a scene arise.
 2. A thin flat part (Y extent <= THIN_RATIO x its X and Z extents) whose Y span reaches its
    parent's front plane (within FRONT_TOL) is a door: a hinge about +Z on its vertical edge
-   nearer the parent's matching side wall, opening outwards (towards -Y) by up to 90 degrees.
+   nearer the parent's matching side wall, at the door's back face, opening outwards (towards
+   -Y) by up to 90 degrees.
 3. A box-like part (smallest extent >= THIN_RATIO x its largest) contained in its parent and
    reaching the parent's front plane is a drawer: a slide along -Y, out by 0.8 of its depth.
 4. Siblings with the same sorted extents (within SIZE_TOL) are `symmetric` when their centroids
@@ -80,12 +82,12 @@ def _parent(part: int, higher: list[int], boxes: Mapping[int, Box]) -> int | Non
     containers = [q for q in higher if _contains(boxes[q], boxes[part])]
     if containers:
         return min(containers, key=lambda q: (boxes[q].volume, q))
-    best, best_area = None, -1.0
+    touching = []
     for q in higher:
         gap, area = _gap_and_contact(boxes[part], boxes[q])
-        if gap <= TOUCH_TOL and area > best_area:
-            best, best_area = q, area
-    return best
+        if gap <= TOUCH_TOL:
+            touching.append((round(gap, 3), -area, q))
+    return min(touching)[2] if touching else None
 
 
 def _reaches_front(part: Box, parent: Box) -> bool:
@@ -105,7 +107,7 @@ def _joint(part: Box, parent: Box) -> Joint | None:
         left = abs(lo[0] - plo[0]) <= abs(hi[0] - phi[0])
         # Left-edge hinge: the door extends along +X, so opening towards -Y is a negative angle.
         edge, rng = (lo[0], (-math.pi / 2, 0.0)) if left else (hi[0], (0.0, math.pi / 2))
-        return Joint("hinge", (0.0, 0.0, 1.0), (float(edge), cy, cz), rng)
+        return Joint("hinge", (0.0, 0.0, 1.0), (float(edge), float(hi[1]), cz), rng)
     if min(part.extent) >= THIN_RATIO * max(part.extent) and _contains(parent, part):
         return Joint("slide", (0.0, -1.0, 0.0), (cx, cy, cz), (0.0, SLIDE_FRACTION * ey))
     return None
