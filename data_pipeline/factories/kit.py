@@ -52,14 +52,17 @@ def u(rng: np.random.Generator, lo: float, hi: float) -> float:
 
 
 def carcass(w: ProgramWriter, width: float, depth: float, height: float, t: float, z0: float = 0.0,
-            cx: float = 0.0, through: bool = False) -> Ref:
-    """A box open at the front (and at the back when `through`), walls of thickness t."""
+            cx: float = 0.0, through: bool = False, extra_cuts: tuple[Ref, ...] = ()) -> Ref:
+    """A box open at the front (and at the back when `through`), walls of thickness t.
+
+    `extra_cuts` are further boxes removed with the cavity (e.g. a sink opening in the top).
+    """
     outer = w.box((width, depth, height), (cx, 0.0, z0 + height / 2))
     if through:
         inner = w.box((width - 2 * t, depth + 0.02, height - 2 * t), (cx, 0.0, z0 + height / 2))
     else:
         inner = w.box((width - 2 * t, depth - t + 0.01, height - 2 * t), (cx, -(t + 0.01) / 2, z0 + height / 2))
-    return w.difference(outer, inner)
+    return w.difference(outer, inner, *extra_cuts)
 
 
 def open_top_tray(w: ProgramWriter, size, center, t: float) -> Ref:

@@ -35,10 +35,23 @@ def cabinet(w: ProgramWriter, rng: np.random.Generator) -> None:
     width, depth, height, t = u(rng, 0.45, 1.0), u(rng, 0.32, 0.55), u(rng, 0.6, 1.3), 0.018
     mat, handle_mat = kit.wood(w, rng), kit.metal(w, rng)
     body = w.part("body", kit.carcass(w, width, depth, height, t), mat)
+    handle = "bar" if rng.random() < 0.6 else "knob"
+    doors_top = height
+    if rng.random() < 0.35:  # a row of drawers above the doors, behind a divider board
+        drawer_h = u(rng, 0.12, 0.18)
+        doors_top = height - drawer_h
+        w.part("divider", w.box((width - 2 * t, depth - t - 0.01, t), (0.0, -(t + 0.01) / 2, doors_top)), mat,
+               parent=body)
+        cols = 2 if width > 0.7 else 1
+        col_w = width / cols
+        for c in range(cols):
+            x0 = -width / 2 + c * col_w
+            kit.drawer(w, body, x0 + kit.EPS, x0 + col_w - kit.EPS, doors_top + kit.EPS, height - kit.EPS,
+                       -depth / 2, depth - t - 0.02, t, mat, handle_mat,
+                       (-width / 2 + t, width / 2 - t, doors_top + t / 2, height - t), handle)
     n = int(rng.integers(1, 4))
-    _shelves(w, body, width, depth, t, [height * (i + 1) / (n + 1) for i in range(n)], mat)
-    _door_pair(w, body, width, 0.0, height, -depth / 2, t, mat, handle_mat, rng,
-               handle="bar" if rng.random() < 0.6 else "knob")
+    _shelves(w, body, width, depth, t, [doors_top * (i + 1) / (n + 1) for i in range(n)], mat)
+    _door_pair(w, body, width, 0.0, doors_top, -depth / 2, t, mat, handle_mat, rng, handle=handle)
 
 
 def drawer_chest(w: ProgramWriter, rng: np.random.Generator) -> None:
@@ -79,9 +92,23 @@ def wardrobe(w: ProgramWriter, rng: np.random.Generator) -> None:
             kit.drawer(w, body, x0 + kit.EPS, x0 + half - kit.EPS, kit.EPS, drawer_h - kit.EPS,
                        -depth / 2, depth - t - 0.02, t, mat, handle_mat,
                        (-width / 2 + t, width / 2 - t, t, drawer_h - t / 2))
-    opening = u(rng, 1.5, 2.0)
     z0 = drawer_h
     g = kit.EPS
+    if rng.random() < 0.35:  # sliding doors on two tracks in front of the carcass
+        overlap, travel = 0.03, width / 2 - 0.05
+        for side, track in (("left", 1), ("right", 0)):
+            x0, x1 = (-width / 2 + g, overlap / 2) if side == "left" else (-overlap / 2, width / 2 - g)
+            y_back = -depth / 2 - track * (t + g)
+            panel = w.box((x1 - x0, t, height - z0 - 2 * g), ((x0 + x1) / 2, y_back - t / 2, (z0 + height) / 2))
+            toward = 1.0 if side == "left" else -1.0
+            door = w.part("door", panel, mat, parent=body, twin="door",
+                          joint=JointSpec("slide", (toward, 0.0, 0.0), ((x0 + x1) / 2, y_back - t / 2, (z0 + height) / 2),
+                                          (0.0, travel)))
+            grip_x = x0 + 0.06 if side == "left" else x1 - 0.06
+            w.part("handle", kit.bar_handle(w, grip_x, y_back - t, (z0 + height) / 2, 0.3, vertical=True,
+                                            standoff=0.015), handle_mat, parent=door)
+        return
+    opening = u(rng, 1.5, 2.0)
     kit.hinged_door(w, body, -width / 2 + g, -g, z0 + g, height - g, -depth / 2, t, "left", mat, handle_mat, opening)
     kit.hinged_door(w, body, g, width / 2 - g, z0 + g, height - g, -depth / 2, t, "right", mat, handle_mat, opening)
 
