@@ -59,4 +59,6 @@ def mass_properties(mesh: trimesh.Trimesh, density: float, scale: float = 1.0,
     props = trimesh.triangles.mass_properties(solid.triangles, density=density)
     inertia = np.asarray(props["inertia"], dtype=np.float64)
     com = np.asarray(props["center_mass"], dtype=np.float64)
-    return MassProperties(float(density * volume), volume, com, (inertia + inertia.T) / 2, kind)
+    inertia = (inertia + inertia.T) / 2
+    inertia[np.abs(inertia) < 1e-12 * np.abs(np.trace(inertia))] = 0.0  # round-off of symmetric solids
+    return MassProperties(float(density * volume), volume, com, inertia, kind)

@@ -1,0 +1,102 @@
+"""URDF export: one link per part, revolute / prismatic / fixed joints, inertials, OBJ meshes.
+
+Each link's frame is at its joint pivot (rigid parts share their parent's frame; see
+``assembly``), so a joint's origin is the pivot relative to the parent link, with no rotation,
+and its axis is the structure's axis. Inertials come from the part's solid (closed mesh, else
+convex hull, else a thin box) × the family density. Meshes are written beside the URDF in
+``meshes/<id>.obj``, already in the link frame and in metres; a flat part collides as a box.
+A scene with several roots gets a ``scene_root`` base link holding each root by a fixed joint.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import trimesh
+
+from jax3dc.export.assembly import ExportPart, assemble, unit_axis, vec
+from jax3dc.export.files import write_files
+from jax3dc.geometry.parts import obj_text
+from jax3dc.materials import MATERIALS
+from jax3dc.structure.schema import Structure
+
+MESH_DIR = "meshes"
+SCENE_ROOT = "scene_root"
+JOINT_TYPES = {"hinge": "revolute", "slide": "prismatic"}
+# URDF requires effort (N or N·m) and velocity (rad/s or m/s) limits; generous household values.
+EFFORT_LIMIT = 100.0
+VELOCITY_LIMIT = 10.0
+
+
+def urdf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0, *,
+               model_name: str = "object") -> tuple[str, dict[str, bytes]]:
+    """URDF text and its mesh files ({path relative to the URDF file: bytes})."""
+    export = assemble(structure, parts, scale)
+    robot = ET.Element("robot", name=model_name)
+    # MuJoCo's URDF compiler reads this extension (others ignore it): keep the meshes' folder.
+    ET.SubElement(ET.SubElement(robot, "mujoco"), "compiler", strippath="false", discardvisual="true",
+                  fusestatic="false")
+    for material_id, material in sorted(structure.materials.items()):
+        ET.SubElement(ET.SubElement(robot, "material", name=f"material_{material_id}"), "color",
+                      rgba=vec(MATERIALS[material.family].rgba))
+    labels = {part.part_id: part.label for part in export}
+    roots = [part for part in export if part.parent is None]
+    if len(roots) > 1:
+        ET.SubElement(robot, "link", name=SCENE_ROOT)
+    files: dict[str, bytes] = {}
+    for part in export:
+        file_name = f"{MESH_DIR}/{part.part_id}.obj"
+        files[file_name] = obj_text(part.mesh).encode()
+        _add_link(robot, part, file_name)
+        if part.parent is not None:
+            _add_joint(robot, part, labels[part.parent])
+        elif len(roots) > 1:
+            joint = ET.SubElement(robot, "joint", name=f"fix_{part.part_id}", type="fixed")
+            ET.SubElement(joint, "parent", link=SCENE_ROOT)
+            ET.SubElement(joint, "child", link=part.label)
+            ET.SubElement(joint, "origin", xyz=vec(part.offset_m), rpy="0 0 0")
+    ET.indent(robot, space="  ")
+    return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n", files
+
+
+def _add_link(robot: ET.Element, part: ExportPart, mesh_file: str) -> None:
+    link = ET.SubElement(robot, "link", name=part.label)
+    inertial = ET.SubElement(link, "inertial")
+    ET.SubElement(inertial, "origin", xyz=vec(part.mass.center_of_mass), rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=vec([part.mass.mass]))
+    i = part.mass.inertia
+    ET.SubElement(inertial, "inertia", ixx=vec([i[0, 0]]), ixy=vec([i[0, 1]]), ixz=vec([i[0, 2]]),
+                  iyy=vec([i[1, 1]]), iyz=vec([i[1, 2]]), izz=vec([i[2, 2]]))
+    visual = ET.SubElement(link, "visual")
+    ET.SubElement(visual, "origin", xyz="0 0 0", rpy="0 0 0")
+    ET.SubElement(ET.SubElement(visual, "geometry"), "mesh", filename=mesh_file)
+    ET.SubElement(visual, "material", name=f"material_{part.material_id}")
+    collision = ET.SubElement(link, "collision")
+    if part.solid == "box":
+        centre, size = part.box_fallback()
+        ET.SubElement(collision, "origin", xyz=vec(centre), rpy="0 0 0")
+        ET.SubElement(ET.SubElement(collision, "geometry"), "box", size=vec(size))
+    else:
+        ET.SubElement(collision, "origin", xyz="0 0 0", rpy="0 0 0")
+        ET.SubElement(ET.SubElement(collision, "geometry"), "mesh", filename=mesh_file)
+
+
+def _add_joint(robot: ET.Element, part: ExportPart, parent_label: str) -> None:
+    kind = "fixed" if part.joint is None else JOINT_TYPES[part.joint.type]
+    joint = ET.SubElement(robot, "joint", name=f"joint_{part.part_id}", type=kind)
+    ET.SubElement(joint, "parent", link=parent_label)
+    ET.SubElement(joint, "child", link=part.label)
+    ET.SubElement(joint, "origin", xyz=vec(part.offset_m), rpy="0 0 0")
+    if part.joint is not None:
+        lo, hi = part.range_si
+        ET.SubElement(joint, "axis", xyz=vec(unit_axis(part.joint)))
+        ET.SubElement(joint, "limit", lower=vec([lo]), upper=vec([hi]), effort=vec([EFFORT_LIMIT]),
+                      velocity=vec([VELOCITY_LIMIT]))
+
+
+def export_urdf(structure: Structure, parts: dict[int, trimesh.Trimesh], out_dir: str | Path, scale: float = 1.0, *,
+                model_name: str = "object") -> Path:
+    """Write ``<out_dir>/<model_name>.urdf`` and ``<out_dir>/meshes/<id>.obj``; returns the URDF path."""
+    text, files = urdf_model(structure, parts, scale, model_name=model_name)
+    return write_files(Path(out_dir), f"{model_name}.urdf", text, files)
