@@ -20,6 +20,9 @@ from jax3dc.structure.schema import Box, Joint, Node, Relation, Structure
 from jax3dc.structure.serialize import round_number, rounded_axis
 
 
+_UNIT_TOLERANCE = 1e-12
+
+
 def is_degenerate(j: Joint) -> bool:
     """A joint that cannot move: zero or non-finite axis, or a range of zero length as written."""
     axis = [float(c) for c in j.axis]
@@ -39,8 +42,10 @@ def reversed_joint(j: Joint) -> Joint:
 
 def oriented_joint(j: Joint) -> Joint:
     """Unit axis whose largest-magnitude component (as written, first on ties) is positive."""
-    norm = math.sqrt(sum(float(c) ** 2 for c in j.axis))
-    axis = tuple(float(c) / norm for c in j.axis)
+    axis = tuple(float(c) for c in j.axis)
+    norm = math.sqrt(sum(c * c for c in axis))
+    if abs(norm - 1.0) > _UNIT_TOLERANCE:  # renormalising a unit vector again would drift by ulps
+        axis = tuple(c / norm for c in axis)
     written = rounded_axis(axis)
     biggest = max(abs(c) for c in written)
     k = next(i for i, c in enumerate(written) if abs(c) == biggest)

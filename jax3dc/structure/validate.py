@@ -380,18 +380,21 @@ def _id_list(ids: list[int], limit: int = 10) -> str:
     return text + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
 
 
-def _load_text(text: str | bytes, checker: _Checker) -> object | None:
+_UNREADABLE = object()  # what _load_text returns when the text is not a JSON document
+
+
+def _load_text(text: str | bytes, checker: _Checker) -> object:
     size = len(text) if isinstance(text, bytes) else len(text.encode("utf-8", "surrogatepass"))
     if size > MAX_DOCUMENT_BYTES:
         checker.fail("document_size", "", f"the document is {size} bytes; the limit is {MAX_DOCUMENT_BYTES} "
                      "(MAX_DOCUMENT_BYTES: far above any real structure)")
-        return None
+        return _UNREADABLE
     if isinstance(text, bytes):
         try:
             text = text.decode("utf-8")
         except UnicodeDecodeError as e:
             checker.fail("json", f"byte {e.start}", "the document is not UTF-8 text")
-            return None
+            return _UNREADABLE
 
     def pairs(items: list[tuple[str, object]]) -> dict:
         out: dict = {}
@@ -409,14 +412,14 @@ def _load_text(text: str | bytes, checker: _Checker) -> object | None:
         checker.fail("json", f"line {e.lineno} column {e.colno}", f"invalid JSON: {e.msg}{hint}")
     except RecursionError:
         checker.fail("json", "", "invalid JSON: nested too deeply")
-    return None
+    return _UNREADABLE
 
 
 def _check(doc: str | bytes | Mapping, part_ids: Iterable[int] | None) -> tuple[Structure | None, list[StructureError]]:
     checker = _Checker()
     if isinstance(doc, str | bytes):
         loaded = _load_text(doc, checker)
-        if loaded is None:
+        if loaded is _UNREADABLE:
             return None, checker.errors
     else:
         loaded = doc
