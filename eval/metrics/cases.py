@@ -19,7 +19,7 @@ from typing import Any, Iterable, Iterator, Mapping
 
 from eval.metrics.score import Case
 from jax3dc.errors import InputFileError, StructureError
-from jax3dc.structure.schema import Box, Structure
+from jax3dc.structure import Box, Structure, boxes_from_dict, canonicalize, parse_structure
 
 MISSING_RULE = "missing"
 
@@ -57,8 +57,6 @@ def read_jsonl(path: str | Path) -> Iterator[tuple[int, dict[str, Any]]]:
 
 def load_references(path: str | Path) -> list[Reference]:
     """Parse, validate and canonicalise every reference line (invalid references are an error)."""
-    from jax3dc.structure import boxes_from_dict, canonicalize, parse_structure
-
     refs: list[Reference] = []
     seen: set[str] = set()
     for number, item in read_jsonl(path):
@@ -104,8 +102,6 @@ def json_text(raw: str) -> str:
 
 def parse_prediction(doc: str | Mapping[str, Any], ref: Reference) -> Structure:
     """Validate a prediction against the reference part ids and canonicalise it (StructureError)."""
-    from jax3dc.structure import canonicalize, parse_structure
-
     source = json_text(doc) if isinstance(doc, str) else dict(doc)
     return canonicalize(parse_structure(source, ref.structure.nodes.keys()), ref.boxes)
 

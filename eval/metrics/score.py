@@ -7,6 +7,7 @@ rows; relations and scene partitions are small set / table computations per obje
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
@@ -68,6 +69,10 @@ def _f1(tp: float, n_pred: float, n_ref: float) -> float | None:
     return 200.0 * tp / (n_pred + n_ref) if n_pred + n_ref else None
 
 
+def _finite(x: float) -> float | None:
+    return None if math.isnan(x) else x
+
+
 def evaluate(cases: Sequence[Case]) -> Evaluation:
     """Score every case; returns split metrics (metrics.json) and one row per object."""
     parsed = [c for c in cases if c.prediction is not None]
@@ -82,11 +87,12 @@ def evaluate(cases: Sequence[Case]) -> Evaluation:
     n_pred, n_ref = pred_joints.counts, ref_joints.counts
     rels = [relation_counts(p, r) for p, r in zip(preds, refs)]
 
-    scene_ref = [len(c.reference.roots()) > 1 for c in cases]
+    scene_ref = [sum(n.parent is None for n in c.reference.nodes.values()) > 1 for c in cases]
+    is_scene = {id(c): flag for c, flag in zip(cases, scene_ref)}
     partitions = {
         i: partition_scores(object_labels(c.prediction), object_labels(c.reference))
         for i, c in enumerate(parsed)
-        if len(c.reference.roots()) > 1
+        if is_scene[id(c)]
     }
 
     # ---- split-level metrics -------------------------------------------------------------
@@ -138,6 +144,13 @@ def evaluate(cases: Sequence[Case]) -> Evaluation:
 
     # ---- per-object rows -----------------------------------------------------------------
     rows: list[dict[str, Any]] = []
+    match_rows = [
+        {"pred_child": pc, "ref_child": rc, "type_ok": ok, "angle": angle, "line_distance": _finite(dist),
+         "range_iou": _finite(iou), "gate": GATES[gate]}
+        for pc, rc, ok, angle, dist, iou, gate in zip(
+            matched.pred_child.tolist(), matched.ref_child.tolist(), matched.type_ok.tolist(),
+            matched.angle.tolist(), matched.line_distance.tolist(), matched.range_iou.tolist(), matched.gate.tolist())
+    ]
     index = {id(c): i for i, c in enumerate(parsed)}
     starts = np.searchsorted(matched.obj, np.arange(len(parsed) + 1))
     for case, is_scene in zip(cases, scene_ref):
@@ -159,19 +172,7 @@ def evaluate(cases: Sequence[Case]) -> Evaluation:
             presence_f1=_f1(int(n_matched[i]), int(n_pred[i]), int(n_ref[i])) if joints else None,
             **{k: getattr(rels[i], k) for k in RELATION_FIELDS},
         )
-        lo, hi = starts[i], starts[i + 1]
-        row["matches"] = [
-            {
-                "pred_child": int(matched.pred_child[j]),
-                "ref_child": int(matched.ref_child[j]),
-                "type_ok": bool(matched.type_ok[j]),
-                "angle": float(matched.angle[j]),
-                "line_distance": None if np.isnan(matched.line_distance[j]) else float(matched.line_distance[j]),
-                "range_iou": None if np.isnan(matched.range_iou[j]) else float(matched.range_iou[j]),
-                "gate": GATES[matched.gate[j]],
-            }
-            for j in range(lo, hi)
-        ]
+        row["matches"] = match_rows[starts[i]:starts[i + 1]]
         if i in partitions:
             s = partitions[i]
             row.update(
