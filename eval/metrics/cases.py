@@ -76,6 +76,8 @@ def load_references(path: str | Path) -> list[Reference]:
         if missing:
             raise InputFileError(path, f"{where}: no box for parts {missing}")
         refs.append(Reference(key, canonicalize(structure, boxes), boxes))
+    if not refs:
+        raise InputFileError(path, "no reference lines")
     return refs
 
 

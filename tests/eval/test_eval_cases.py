@@ -165,6 +165,9 @@ def test_file_errors_name_file_and_line(tmp_path):
     ref.write_text(json.dumps({"key": "a", "structure": bad, "boxes": BOXES}) + "\n")
     with pytest.raises(InputFileError, match="invalid reference.*self_parent"):
         load_references(ref)
+    ref.write_text("\n")
+    with pytest.raises(InputFileError, match="no reference lines"):
+        load_references(ref)
     pred = tmp_path / "pred.jsonl"
     pred.write_text('{"key": "a", "text": "x"}\n{"key": "a", "text": "y"}\n')
     with pytest.raises(InputFileError, match="line 2 .*duplicate key"):
