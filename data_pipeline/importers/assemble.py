@@ -18,6 +18,8 @@ from data_pipeline.importers.frames import front_to_minus_y
 from data_pipeline.importers.kinematic_tree import KinematicTree, reduce_to_parts
 from data_pipeline.importers.material_guess import DEFAULT_FAMILY, guess_family
 from jax3dc.errors import InputFileError
+from jax3dc.geometry.parts import part_boxes
+from jax3dc.structure import canonicalize
 from jax3dc.structure.schema import Box, Joint, Material, Node, Structure
 
 
@@ -112,15 +114,6 @@ def assemble(
     return ImportedObject(structure, parts, boxes, meta)
 
 
-def part_boxes(parts: dict[int, trimesh.Trimesh]) -> dict[int, Box]:
-    from jax3dc.geometry.parts import part_boxes as boxes_of
-
-    return boxes_of(parts)
-
-
 def finish_structure(structure: Structure, parts: dict[int, trimesh.Trimesh], boxes: dict[int, Box]) -> Structure:
-    """Canonical form (SPEC §2) with the extracted symmetric / instance relations."""
-    from jax3dc.relations import extract_relations
-    from jax3dc.structure import canonicalize
-
-    return canonicalize(extract_relations(structure, parts), boxes)
+    """Canonical form (SPEC §2)."""
+    return canonicalize(structure, boxes)
