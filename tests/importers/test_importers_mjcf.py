@@ -135,3 +135,33 @@ def test_several_joints_in_one_body_keep_the_hinge(tmp_path):
     (child, j), = obj.structure.joints().items()
     assert j.type == "hinge" and j.range == pytest.approx((0.0, 6.0))
     assert any("twist" in w and "lift" in w for w in obj.meta["warnings"])
+
+
+FIXTURES = Path(__file__).parents[2].parent / "shared" / "fixtures" / "partnet_mobility"
+
+
+@pytest.mark.parametrize("name", ["microwave_7119", "drawer_20453", "safe_rotate_101593"])
+def test_round_trip_through_the_mjcf_exporter(tmp_path, name):
+    """PartNet-Mobility object -> structure + parts -> jax3dc's MJCF export -> this importer."""
+    if not (FIXTURES / name).is_dir():
+        pytest.skip(f"fixture {name} not found at {FIXTURES}")
+    from jax3dc.export.mjcf import export_mjcf
+
+    first = import_object(FIXTURES / name)
+    xml = export_mjcf(first.structure, first.parts, tmp_path, scale=first.meta["scale"], model_name="obj")
+    second = import_object(xml)
+    assert second.meta["scale"] == pytest.approx(first.meta["scale"], rel=1e-3)
+    # bodies are named part_<id>[_<name>] by the exporter: map the new ids back to the first ones
+    back = {int(k): int(v.split("_")[1]) for k, v in second.meta["part_links"].items()}
+    assert sorted(back.values()) == sorted(first.structure.nodes)
+    for new_id, old_id in back.items():
+        np.testing.assert_allclose(second.boxes[new_id].centroid, first.boxes[old_id].centroid, atol=2e-3)
+        old, new = first.structure.nodes[old_id], second.structure.nodes[new_id]
+        assert (None if new.parent is None else back[new.parent]) == old.parent
+        assert (new.joint is None) == (old.joint is None)
+        if old.joint is not None:
+            assert new.joint.type == old.joint.type
+            np.testing.assert_allclose(new.joint.axis, old.joint.axis, atol=1e-6)
+            np.testing.assert_allclose(new.joint.range, old.joint.range, atol=1e-6)
+            offset = np.asarray(new.joint.pivot) - np.asarray(old.joint.pivot)
+            assert np.linalg.norm(np.cross(offset, old.joint.axis)) < 2e-3
