@@ -10,10 +10,24 @@ from data_pipeline.factories.writer import JointSpec, ProgramWriter
 
 
 def refrigerator(w: ProgramWriter, rng: np.random.Generator) -> None:
-    width, depth, height, t = u(rng, 0.55, 0.9), u(rng, 0.6, 0.72), u(rng, 1.4, 1.95), 0.04
+    width, depth, height, t = u(rng, 0.55, 0.95), u(rng, 0.6, 0.72), u(rng, 1.4, 1.95), 0.04
     shell = w.material("Metal", kit.pick(rng, ("white enamelled steel", "stainless steel", "black steel")))
     handle_mat, shelf_mat = kit.metal(w, rng), kit.glass(w, rng)
     body = w.part("body", kit.carcass(w, width, depth, height, t), shell)
+    g, door_t = kit.EPS, 0.05
+    if width > 0.72 and rng.random() < 0.5:  # side by side: freezer left, fridge right, mirrored doors
+        w.part("divider", w.box((t, depth - t - 0.01, height - 2 * t), (0.0, -(t + 0.01) / 2, height / 2)), shell,
+               parent=body)
+        for i in range(int(rng.integers(2, 5))):
+            z = t + (height - 2 * t) * (i + 1) / 5
+            w.part("shelf", w.box((width / 2 - 1.5 * t - 0.004, depth - t - 0.06, 0.006),
+                                  (width / 4 - t / 4, -0.03 + t / 2, z)), shelf_mat, parent=body, twin="shelf")
+        opening = u(rng, 1.6, 2.1)
+        kit.hinged_door(w, body, -width / 2 + g, -g, g, height - g, -depth / 2, door_t, "left", shell, handle_mat,
+                        opening, name="freezer_door", twin="door")
+        kit.hinged_door(w, body, g, width / 2 - g, g, height - g, -depth / 2, door_t, "right", shell, handle_mat,
+                        opening, name="fridge_door", twin="door")
+        return
     split = height * u(rng, 0.3, 0.4)
     freezer_bottom = rng.random() < 0.6
     w.part("divider", w.box((width - 2 * t, depth - t - 0.01, t), (0.0, -(t + 0.01) / 2, split)), shell,
@@ -24,7 +38,6 @@ def refrigerator(w: ProgramWriter, rng: np.random.Generator) -> None:
         w.part("shelf", w.box((width - 2 * t - 0.004, depth - t - 0.06, 0.006), (0.0, -0.03 + t / 2, z)), shelf_mat,
                parent=body, twin="shelf")
     side = "left" if rng.random() < 0.5 else "right"
-    g, door_t = kit.EPS, 0.05
     bands = [(0.0, split), (split, height)]
     names = ("freezer_door", "fridge_door") if freezer_bottom else ("fridge_door", "freezer_door")
     for (z0, z1), name in zip(bands, names):
@@ -126,6 +139,9 @@ def washing_machine(w: ProgramWriter, rng: np.random.Generator) -> None:
     width, depth, height = u(rng, 0.58, 0.62), u(rng, 0.5, 0.62), u(rng, 0.82, 0.88)
     shell, ring_mat, pane, knob_mat = (w.material("Metal", "white enamelled steel"), kit.plastic(w, rng),
                                        kit.glass(w, rng), kit.plastic(w, rng))
+    if rng.random() < 0.3:
+        _top_loader(w, rng, width, depth, height, shell, ring_mat, knob_mat)
+        return
     dw, dh = width * 0.35, 0.07
     dx, dz = -width / 2 + 0.03 + dw / 2, height - 0.06
     slot = w.box((dw + 0.004, depth * 0.5 + 0.01, dh + 0.004), (dx, -depth / 2 + depth * 0.25 - 0.005, dz))
@@ -145,3 +161,22 @@ def washing_machine(w: ProgramWriter, rng: np.random.Generator) -> None:
     kx, kz = width / 2 - 0.09, height - 0.06
     w.part("program_knob", kit.knob(w, kx, y_front, kz, 0.03, 0.025), knob_mat, parent=body,
            joint=JointSpec("hinge", (0.0, -1.0, 0.0), (kx, y_front - 0.0125, kz), kit.full_turn()))
+
+
+def _top_loader(w, rng, width, depth, height, shell, lid_mat, knob_mat) -> None:
+    """Washing machine loaded from the top: a lid hinged at the back, a console behind it."""
+    console_d, console_h = 0.12, u(rng, 0.08, 0.14)
+    opening = min(width, depth - console_d) * 0.76  # square, so the housing is an exact box difference
+    drum_box = w.box((opening, opening, 0.4), (0.0, -console_d / 2, height - 0.2))
+    body = w.part("body", w.difference(w.box((width, depth, height), (0.0, 0.0, height / 2)), drum_box), shell)
+    lid_d = depth - console_d - 0.02
+    lid = w.box((width - 0.04, lid_d, 0.02), (0.0, -depth / 2 + 0.01 + lid_d / 2, height + 0.01))
+    hinge_y = -depth / 2 + 0.01 + lid_d
+    w.part("lid", lid, lid_mat, parent=body,
+           joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, hinge_y, height), (0.0, u(rng, 1.4, 1.8))))
+    console = w.box((width, console_d, console_h), (0.0, depth / 2 - console_d / 2, height + console_h / 2))
+    console_id = w.part("control_panel", console, shell, parent=body)
+    kx, kz = width / 2 - 0.1, height + console_h / 2
+    y_face = depth / 2 - console_d
+    w.part("program_knob", kit.knob(w, kx, y_face, kz, 0.025, 0.02), knob_mat, parent=console_id,
+           joint=JointSpec("hinge", (0.0, -1.0, 0.0), (kx, y_face - 0.01, kz), kit.full_turn()))

@@ -43,7 +43,8 @@ def laptop(w: ProgramWriter, rng: np.random.Generator) -> None:
     lid_range = (-round(math.radians(170.0 - opened), 3), round(math.radians(opened), 3))
     lid_id = w.part("screen_lid", lid, shell, parent=base,
                     joint=JointSpec("hinge", (1.0, 0.0, 0.0), hinge, lid_range))
-    panel = w.rotate(w.box((width * 0.9, depth * 0.85, 0.001), (0.0, 0.0, base_h - 0.0005)), -opened, "x", hinge)
+    # the display sits 0.2 mm off the lid's inner face: rounding in the program never makes them overlap
+    panel = w.rotate(w.box((width * 0.9, depth * 0.85, 0.002), (0.0, 0.0, base_h - 0.0012)), -opened, "x", hinge)
     w.part("display", panel, screen, parent=lid_id)
 
 
@@ -106,26 +107,35 @@ def trash_can(w: ProgramWriter, rng: np.random.Generator) -> None:
 
 
 def door(w: ProgramWriter, rng: np.random.Generator) -> None:
-    width, height, t = u(rng, 0.75, 1.0), u(rng, 1.95, 2.2), u(rng, 0.035, 0.045)
+    double = rng.random() < 0.3
+    width = u(rng, 1.2, 1.8) if double else u(rng, 0.75, 1.0)
+    height, t = u(rng, 1.95, 2.2), u(rng, 0.035, 0.045)
     frame_w, frame_d = 0.07, u(rng, 0.1, 0.16)
     leaf_mat, frame_mat, handle_mat = kit.wood(w, rng), kit.wood(w, rng), kit.metal(w, rng)
     outer = w.box((width + 2 * frame_w, frame_d, height + frame_w), (0.0, 0.0, (height + frame_w) / 2))
     opening = w.box((width, frame_d + 0.02, height + 0.01), (0.0, 0.0, (height - 0.01) / 2))
     frame = w.part("frame", w.difference(outer, opening), frame_mat)
-    side = "left" if rng.random() < 0.5 else "right"
     g = 0.003
-    leaf = w.box((width - 2 * g, t, height - g), (0.0, 0.0, (height - g) / 2))
-    hinge_x = -width / 2 + g if side == "left" else width / 2 - g
-    axis = (0.0, 0.0, -1.0) if side == "left" else (0.0, 0.0, 1.0)
-    leaf_id = w.part("leaf", leaf, leaf_mat, parent=frame,
-                     joint=JointSpec("hinge", axis, (hinge_x, -t / 2, height / 2), (0.0, u(rng, 1.4, 1.9))))
-    free = 1.0 if side == "left" else -1.0
-    hx, hz = free * (width / 2 - 0.07), u(rng, 0.95, 1.05)
-    hub = w.cylinder(0.025, 0.015, (hx, -t / 2 - 0.0075, hz), axis="y", segments=16)
-    grip = w.box((0.12, 0.018, 0.018), (hx - free * 0.06, -t / 2 - 0.045, hz))
-    stem = w.cylinder(0.008, 0.04, (hx, -t / 2 - 0.02, hz), axis="y", segments=12)
-    w.part("lever_handle", w.combine(hub, stem, grip), handle_mat, parent=leaf_id,
-           joint=JointSpec("hinge", (0.0, -free, 0.0), (hx, -t / 2 - 0.0075, hz), (0.0, 0.7)))
+    if double:
+        leaves = [(-width / 2 + g, -g, "left"), (g, width / 2 - g, "right")]
+    else:
+        side = "left" if rng.random() < 0.5 else "right"
+        leaves = [(-width / 2 + g, width / 2 - g, side)]
+    swing = u(rng, 1.4, 1.9)
+    hz = u(rng, 0.95, 1.05)
+    for x0, x1, side in leaves:
+        leaf = w.box((x1 - x0, t, height - g), ((x0 + x1) / 2, 0.0, (height - g) / 2))
+        hinge_x = x0 if side == "left" else x1
+        axis = (0.0, 0.0, -1.0) if side == "left" else (0.0, 0.0, 1.0)
+        leaf_id = w.part("leaf", leaf, leaf_mat, parent=frame, twin="leaf",
+                         joint=JointSpec("hinge", axis, (hinge_x, -t / 2, height / 2), (0.0, swing)))
+        free = 1.0 if side == "left" else -1.0  # direction from the hinge to the free edge
+        hx = (x1 - 0.07) if side == "left" else (x0 + 0.07)
+        hub = w.cylinder(0.025, 0.015, (hx, -t / 2 - 0.0075, hz), axis="y", segments=16)
+        grip = w.box((0.12, 0.018, 0.018), (hx - free * 0.06, -t / 2 - 0.045, hz))
+        stem = w.cylinder(0.008, 0.04, (hx, -t / 2 - 0.02, hz), axis="y", segments=12)
+        w.part("lever_handle", w.combine(hub, stem, grip), handle_mat, parent=leaf_id,
+               joint=JointSpec("hinge", (0.0, -free, 0.0), (hx, -t / 2 - 0.0075, hz), (0.0, 0.7)))
 
 
 def _sash(w, x0, x1, z0, z1, y, t, bar):
@@ -207,20 +217,21 @@ def lamp(w: ProgramWriter, rng: np.random.Generator) -> None:
     base = w.part("base", w.cylinder(base_r, 0.025, (0.0, 0.0, 0.0125), segments=32), metal)
     l1, l2 = u(rng, 0.25, 0.4), u(rng, 0.25, 0.4)
     a1, a2 = math.radians(u(rng, 60.0, 80.0)), math.radians(u(rng, -30.0, 10.0))
-    p0 = (0.0, 0.0, 0.025)
+    p0 = (0.0, 0.0, 0.025 + 0.012)  # the lower arm's hinge pin rests on the base
     p1 = (0.0, -l1 * math.cos(a1), p0[2] + l1 * math.sin(a1))
     p2 = (0.0, p1[1] - l2 * math.cos(a2), p1[2] + l2 * math.sin(a2))
     # the lower arm stops short of the elbow, where the upper arm's hinge pin sits
     elbow = tuple(b - 0.022 * (b - a) / l1 for a, b in zip(p0, p1))
-    lower = w.part("lower_arm", kit.rod(w, p0, elbow, 0.01), metal, parent=base,
+    base_pin = w.cylinder(0.012, 0.03, p0, axis="x", segments=12)
+    lower = w.part("lower_arm", w.combine(base_pin, kit.rod(w, p0, elbow, 0.01)), metal, parent=base,
                    joint=JointSpec("hinge", (1.0, 0.0, 0.0), p0, (-0.6, 0.6)))
     pin = w.cylinder(0.012, 0.03, p1, axis="x", segments=12)
     upper = w.part("upper_arm", w.combine(pin, kit.rod(w, p1, p2, 0.008)), metal, parent=lower,
                    joint=JointSpec("hinge", (1.0, 0.0, 0.0), p1, (-1.0, 1.0)))
     shade_h, shade_r = u(rng, 0.1, 0.16), u(rng, 0.06, 0.1)
-    shade = w.cone(shade_r, shade_r * 0.3, shade_h, (0.0, p2[1], p2[2] - shade_h / 2 - 0.008), segments=24)
-    w.part("shade", shade, shade_mat, parent=upper,
-           joint=JointSpec("hinge", (1.0, 0.0, 0.0), p2, (-0.8, 0.8)))
+    shade = w.cone(shade_r, shade_r * 0.3, shade_h, (0.0, p2[1], p2[2] - shade_h / 2 - 0.011), segments=24)
+    w.part("shade", shade, shade_mat, parent=upper,  # pivots about the top of the shade, under the arm's end
+           joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, p2[1], p2[2] - 0.011), (-0.8, 0.8)))
 
 
 def suitcase(w: ProgramWriter, rng: np.random.Generator) -> None:

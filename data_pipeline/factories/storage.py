@@ -118,17 +118,46 @@ def kitchen_unit(w: ProgramWriter, rng: np.random.Generator) -> None:
     plinth, height = 0.1, u(rng, 0.78, 0.84)
     mat, handle_mat, top_mat = kit.wood(w, rng), kit.metal(w, rng), w.material("Stone", kit.pick(rng, (
         "grey granite", "white quartz", "black marble")))
-    body = w.part("body", kit.carcass(w, width, depth, height - plinth, t, z0=plinth), mat)
+    sink = width >= 0.6 and rng.random() < 0.35
+    top_t = 0.03
+    hole = None
+    if sink:  # one opening through the countertop and the carcass top, holding a basin
+        hole_w, hole_d, hole_y = min(width - 0.16, 0.5), 0.36, -0.03
+        hole = w.box((hole_w, hole_d, 0.12), (0.0, hole_y, height))
+    cuts = (hole,) if hole is not None else ()
+    body = w.part("body", kit.carcass(w, width, depth, height - plinth, t, z0=plinth, extra_cuts=cuts), mat)
     w.part("plinth", w.box((width, 0.018, plinth), (0.0, -depth / 2 + 0.06, plinth / 2)), mat, parent=body)
-    w.part("countertop", w.box((width + 0.01, depth + 0.04, 0.03), (0.0, -0.02, height + 0.015)), top_mat,
-           parent=body)
+    slab = w.box((width + 0.01, depth + 0.04, top_t), (0.0, -0.02, height + top_t / 2))
+    counter = w.part("countertop", w.difference(slab, hole) if hole is not None else slab, top_mat, parent=body)
     drawer_h = u(rng, 0.13, 0.18)
     top_of_doors = height - drawer_h
-    kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, top_of_doors + kit.EPS, height - kit.EPS,
-               -depth / 2, depth - t - 0.02, t, mat, handle_mat,
-               (-width / 2 + t, width / 2 - t, plinth + t, height - t), twin=None)
+    if sink:
+        steel = w.material("Metal", "stainless steel")
+        basin_h = 0.16
+        basin = kit.open_top_tray(w, (hole_w, hole_d, basin_h), (0.0, hole_y, height + top_t - basin_h / 2), 0.008)
+        w.part("sink_basin", basin, steel, parent=counter)
+        w.part("false_front", w.box((width - 2 * kit.EPS, t, drawer_h - 2 * kit.EPS),
+                                    (0.0, -depth / 2 - t / 2, height - drawer_h / 2)), mat, parent=body)
+        _sink_tap(w, counter, (0.0, hole_y + hole_d / 2 + 0.04, height + top_t), steel)
+    else:
+        kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, top_of_doors + kit.EPS, height - kit.EPS,
+                   -depth / 2, depth - t - 0.02, t, mat, handle_mat,
+                   (-width / 2 + t, width / 2 - t, plinth + t, height - t), twin=None)
     _shelves(w, body, width, depth, t, [plinth + (top_of_doors - plinth) / 2], mat)
     _door_pair(w, body, width, plinth, top_of_doors, -depth / 2, t, mat, handle_mat, rng)
+
+
+def _sink_tap(w: ProgramWriter, parent: int, base, material: int) -> None:
+    """A tap standing on the countertop behind the basin, with a lever on top."""
+    x, y, z = base
+    height, reach = 0.22, 0.17
+    column = w.cylinder(0.02, height, (x, y, z + height / 2), segments=16)
+    spout = w.sweep([(x, y, z + height), (x, y, z + height + 0.03), (x, y - 0.05, z + height + 0.05),
+                     (x, y - reach, z + height + 0.02), (x, y - reach, z + height - 0.04)], 0.011, segments=12)
+    tap = w.part("tap", w.combine(column, spout), material, parent=parent)
+    lever = w.box((0.015, 0.07, 0.012), (x, y + 0.02 + 0.035, z + height * 0.6))
+    w.part("tap_lever", lever, material, parent=tap,
+           joint=JointSpec("hinge", (1.0, 0.0, 0.0), (x, y + 0.02, z + height * 0.6), (0.0, 0.5)))
 
 
 def nightstand(w: ProgramWriter, rng: np.random.Generator) -> None:

@@ -3,8 +3,8 @@
 The shared volume of two parts is estimated from points inside the smaller part (rejection
 sampling in its bounding box), each tested against the other part with the generalised winding
 number (solid angles), a numpy reference independent of the interpreter. Parts that can move relative to each other may share at most 1 % of the
-smaller one's volume (number rounding in the program text); rigidly joined parts up to 3 %
-(joinery such as legs through a foot ring, posts through boards).
+smaller one's volume, rigidly joined parts up to 3 % (joinery), unless the overlap is a slab
+thinner than 1 mm: programs write 4 decimals, so faces that touch may cross by ~0.1 mm.
 """
 
 import numpy as np
@@ -14,6 +14,7 @@ from data_pipeline.factories import FACTORIES, generate_object
 
 SAMPLES = 600
 MOVING_TOL, RIGID_TOL = 0.01, 0.03
+MAX_DEPTH_M = 0.001  # overlaps thinner than 1 mm are number rounding in the program text, not design
 
 
 def winding_number(mesh, points):
@@ -38,6 +39,13 @@ def test_winding_number_reference():
     box = trimesh.creation.box((1, 1, 1))
     w = winding_number(box, np.array([[0, 0, 0], [0.4, -0.4, 0.3], [2, 0, 0], [0, 0.6, 0]]))
     assert np.allclose(w, [1, 1, 0, 0], atol=1e-9)
+
+
+def penetration_depth(shared_volume, a, b):
+    """Shared volume spread over the largest face of the two boxes' intersection: the thickness
+    of the overlap when two parts press face to face (nu)."""
+    extent = np.sort(np.minimum(a.bounds[1], b.bounds[1]) - np.maximum(a.bounds[0], b.bounds[0]))
+    return shared_volume / (extent[1] * extent[2])
 
 
 def shared_fraction(small, other, rng):
@@ -67,4 +75,6 @@ def test_parts_do_not_intersect(category):
                 small, other = (a, b) if a.volume <= b.volume else (b, a)
                 share = shared_fraction(small, other, rng)
                 tol = RIGID_TOL if rigid_body(s, i) == rigid_body(s, j) else MOVING_TOL
-                assert share <= tol, (obj.object_id, i, obj.names[i], j, obj.names[j], round(share, 3))
+                depth_m = penetration_depth(share * small.volume, a, b) * obj.scale_m_per_nu
+                assert share <= tol or depth_m <= MAX_DEPTH_M, \
+                    (obj.object_id, i, obj.names[i], j, obj.names[j], round(share, 3), round(depth_m * 1000, 2))

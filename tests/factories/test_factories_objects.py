@@ -146,13 +146,14 @@ OPENS_TOWARDS_FRONT = {  # hinged parts whose opening swings them out of the fro
     "oven": {"door"}, "microwave": {"door"}, "dishwasher": {"door"}, "washing_machine": {"door"}, "safe": {"door"},
     "door": {"leaf"},
 }
-OPENS_UPWARDS = {"storage_box": {"lid"}, "toilet": {"seat", "lid"}, "trash_can": {"lid"}}
+OPENS_UPWARDS = {"storage_box": {"lid"}, "toilet": {"seat", "lid"}, "trash_can": {"lid"}, "washing_machine": {"lid"}}
+VARIANT_SEEDS = range(6)  # enough seeds to meet each design variant (front loader / top loader, ...)
 
 
 @pytest.mark.parametrize("category", sorted(OPENS_TOWARDS_FRONT))
 def test_doors_swing_out_of_the_front(category):
     found = 0
-    for obj, pid, joint in _moving(category, SEEDS, OPENS_TOWARDS_FRONT[category]):
+    for obj, pid, joint in _moving(category, VARIANT_SEEDS, OPENS_TOWARDS_FRONT[category]):
         if category == "wardrobe" and joint.type == "slide":  # sliding doors run sideways on their tracks
             assert abs(joint.axis[0]) == pytest.approx(1.0) and joint.range[1] > 0.1
             found += 1
@@ -170,19 +171,19 @@ def test_doors_swing_out_of_the_front(category):
             bx = obj.parts[pid].bounds[:, 0]
             assert min(abs(joint.pivot[0] - bx[0]), abs(joint.pivot[0] - bx[1])) < 0.02
         found += 1
-    assert found >= len(SEEDS)
+    assert found >= 2
 
 
 @pytest.mark.parametrize("category", sorted(OPENS_UPWARDS))
 def test_lids_lift(category):
     found = 0
-    for obj, pid, joint in _moving(category, SEEDS, OPENS_UPWARDS[category]):
+    for obj, pid, joint in _moving(category, VARIANT_SEEDS, OPENS_UPWARDS[category]):
         before = obj.parts[pid].bounds.mean(axis=0)
         after = _rotated_centroid(obj.parts[pid], joint, joint.range[1])
         assert abs(joint.axis[0]) == pytest.approx(1.0) and after[2] > before[2] + 0.02
         assert joint.pivot[1] > before[1], "hinged at the back"
         found += 1
-    assert found >= len(SEEDS)
+    assert found >= 2
 
 
 @pytest.mark.parametrize("category", ["drawer_chest", "nightstand", "desk", "dishwasher"])
@@ -193,7 +194,7 @@ def test_drawers_slide_out_of_the_front(category):
         assert joint.axis == pytest.approx((0.0, -1.0, 0.0))
         assert 0 < joint.range[1] < 1.0
         found += 1
-    assert found >= len(SEEDS)
+    assert found >= 2
 
 
 def test_other_articulations():
