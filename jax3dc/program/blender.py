@@ -121,7 +121,7 @@ def jx_extrude(profile, depth=1.0, center=(0, 0, 0), axis="z"):
     face = bm.faces.new(verts)
     step = [0.0, 0.0, 0.0]
     step[{"z": 2, "y": 1, "x": 0}[axis]] = depth
-    made = bmesh.ops.extrude_face_region(bm, geom=[face])
+    made = bmesh.ops.extrude_face_region(bm, geom=[face], use_keep_orig=True)  # keep the bottom cap
     moved = [g for g in made["geom"] if isinstance(g, bmesh.types.BMVert)]
     bmesh.ops.translate(bm, vec=Vector(step), verts=moved)
     bmesh.ops.recalc_face_normals(bm, faces=bm.faces)
