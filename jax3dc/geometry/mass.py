@@ -28,14 +28,15 @@ class MassProperties:
 
 def solid_of(mesh: trimesh.Trimesh, min_thickness: float = 1e-3) -> tuple[trimesh.Trimesh, str]:
     """The closed solid that stands for ``mesh`` in mass computations, and which kind it is."""
-    if len(mesh.faces) and mesh.is_volume and mesh.volume > 0:
-        return mesh, "mesh"
-    try:
-        hull = mesh.convex_hull
-        if hull.volume > min_thickness ** 3:
-            return hull, "convex hull"
-    except Exception:  # qhull fails on flat / collinear point sets
-        pass
+    with np.errstate(invalid="ignore", divide="ignore"):  # trimesh divides by zero volumes on the way
+        if len(mesh.faces) and mesh.is_volume and mesh.volume > min_thickness ** 3:
+            return mesh, "mesh"
+        try:
+            hull = mesh.convex_hull
+            if hull.volume > min_thickness ** 3:
+                return hull, "convex hull"
+        except Exception:  # qhull fails on flat / collinear point sets
+            pass
     lo, hi = np.asarray(mesh.bounds, dtype=np.float64)
     extents = np.maximum(hi - lo, min_thickness)
     box = trimesh.creation.box(extents=extents)
