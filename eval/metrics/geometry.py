@@ -42,12 +42,15 @@ def line_distance(p1: np.ndarray, a1: np.ndarray, p2: np.ndarray, a2: np.ndarray
     """
     a1, a2 = unit(a1), unit(a2)
     d = np.asarray(p2, dtype=np.float64) - np.asarray(p1, dtype=np.float64)
+    # Work on d / scale so that squaring inside the norm cannot overflow for absurd pivots.
+    scale = np.maximum(np.abs(d).max(axis=-1, initial=0.0), 1.0)
+    d = d / scale[:, None]
     normal = np.cross(a1, a2)
     sine = np.linalg.norm(normal, axis=-1)
     parallel = sine < PARALLEL_SINE
     skew = np.abs(np.einsum("ij,ij->i", d, normal)) / np.where(parallel, 1.0, sine)
     offset = np.linalg.norm(np.cross(d, a2), axis=-1)
-    return np.where(parallel, offset, skew)
+    return scale * np.where(parallel, offset, skew)
 
 
 def align_ranges(pred_axis: np.ndarray, pred_range: np.ndarray, ref_axis: np.ndarray) -> np.ndarray:

@@ -31,6 +31,9 @@ from eval.metrics.geometry import align_ranges, axis_angle, interval_iou, interv
 from jax3dc.structure.schema import Structure
 
 CANDIDATE_RADIUS = 0.1
+# Position error in the *cost* is capped: beyond 1000 object sizes every pivot is equally wrong, and
+# the cap keeps the assignment's costs finite whatever finite pivot a prediction writes.
+POSITION_COST_CAP = 1e3
 CHILD_PENALTY = 10.0
 AXIS_TOLERANCE = 0.25
 ORIGIN_TOLERANCE = 0.05
@@ -121,6 +124,7 @@ def pair_costs(pred: JointRows, ref: JointRows) -> CandidatePairs:
     position = np.where(
         both_hinge, line_distance(pred.pivot[pi], pred.axis[pi], ref.pivot[ri], ref.axis[ri]), 0.0
     )
+    position = np.minimum(position, POSITION_COST_CAP)
     cost = axis_angle(pred.axis[pi], ref.axis[ri]) + position + np.where(same_child, 0.0, CHILD_PENALTY)
     return CandidatePairs(offsets, pi, ri, same_child | near, cost)
 

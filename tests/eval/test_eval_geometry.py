@@ -75,3 +75,10 @@ def test_flipping_the_predicted_axis_with_negated_range_changes_nothing(flip):
         pred_axis, pred_range = -pred_axis, -pred_range[:, ::-1]
     assert axis_angle(pred_axis, ref_axis)[0] == pytest.approx(math.atan(0.1))
     np.testing.assert_allclose(align_ranges(pred_axis, pred_range, ref_axis), [[0.3, 1.2]])
+
+
+def test_line_distance_stays_finite_for_absurd_pivots():
+    # squaring 1e200 would overflow; the distance is still exact
+    got = line_distance(rows((0, 0, 0), (0, 0, 0)), rows((0, 0, 1), (0, 0, 1)),
+                        rows((3e200, 4e200, 1.0), (0, 1e300, 0)), rows((0, 0, 1), (1, 0, 0)))
+    np.testing.assert_allclose(got, [5e200, 1e300])

@@ -158,3 +158,11 @@ def test_batched_matching_equals_object_by_object():
         np.testing.assert_array_equal(batch.ref_child[sel], single.ref_child)
         np.testing.assert_array_equal(batch.gate[sel], single.gate)
     assert set(np.unique(batch.gate)) <= set(range(len(GATES)))
+
+
+def test_absurd_predicted_pivots_still_match_and_fail_the_origin_gate():
+    cen = {1: (0, 0, 0), 2: (0.1, 0, 0), 3: (0.12, 0, 0)}
+    ref = structure({1: None, 2: 1, 3: 1}, {2: hinge(), 3: hinge()})
+    pred = structure({1: None, 2: 1, 3: 1}, {2: hinge(pivot=(1e300, 0, 0)), 3: hinge(pivot=(0, 1e250, 0))})
+    rows = evaluate([Case("k", ref, cen, pred)]).rows[0]["matches"]
+    assert [(r["pred_child"], r["ref_child"], r["gate"]) for r in rows] == [(2, 2, "origin"), (3, 3, "origin")]
