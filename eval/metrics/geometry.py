@@ -39,6 +39,10 @@ def line_distance(p1: np.ndarray, a1: np.ndarray, p2: np.ndarray, a2: np.ndarray
     PARALLEL_SINE) that quotient is 0/0, and the distance is the offset of p1 - p2 perpendicular
     to the common direction, ||(p1 - p2) x a_hat|| with a_hat = a2 (the reference axis when p2, a2
     is the reference) -- never the component along an arbitrary perpendicular.
+
+    This is the distance of the infinite lines: two axes a little apart in angle meet somewhere,
+    possibly far outside the object, so a tilted axis can score a small distance however far it
+    sits from the reference inside the object. The axis gate (0.25 rad) is checked first.
     """
     a1, a2 = unit(a1), unit(a2)
     d = np.asarray(p2, dtype=np.float64) - np.asarray(p1, dtype=np.float64)

@@ -91,3 +91,9 @@ def test_eval_baselines_scores_every_baseline_and_reference_is_perfect(tmp_path,
                  "--out", str(again)]) == 0
     assert json.loads((again / "metrics.json").read_text()) == star
     assert (out / "tables.txt").read_text().startswith("Table 1a")
+
+
+def test_eval_without_subcommand_prints_help(capsys):
+    assert main(["eval"]) == 2
+    out = capsys.readouterr().out
+    assert "metrics" in out and "baselines" in out
