@@ -44,9 +44,9 @@ class Dense(nnx.Module):
         self.bias = make_param(rngs, out_shape, out_axes, param_dtype, fill=0.0) if use_bias else None
 
     def __call__(self, x: jax.Array) -> jax.Array:
-        y = jnp.tensordot(x.astype(self.dtype), self.kernel.value.astype(self.dtype), axes=self.n_in)
+        y = jnp.tensordot(x.astype(self.dtype), self.kernel.get_value().astype(self.dtype), axes=self.n_in)
         if self.bias is not None:
-            y = y + self.bias.value.astype(self.dtype)
+            y = y + self.bias.get_value().astype(self.dtype)
         return y
 
 
@@ -62,7 +62,7 @@ class RMSNorm(nnx.Module):
     def __call__(self, x: jax.Array) -> jax.Array:
         xf = x.astype(jnp.float32)
         xf = xf * jax.lax.rsqrt(jnp.mean(xf * xf, axis=-1, keepdims=True) + self.eps)
-        return self.weight.value.astype(self.dtype) * xf.astype(self.dtype)
+        return self.weight.get_value().astype(self.dtype) * xf.astype(self.dtype)
 
 
 class LayerNorm(nnx.Module):
@@ -80,7 +80,7 @@ class LayerNorm(nnx.Module):
         mean = jnp.mean(xf, axis=-1, keepdims=True)
         var = jnp.mean(jnp.square(xf - mean), axis=-1, keepdims=True)
         y = (xf - mean) * jax.lax.rsqrt(var + self.eps)
-        y = y * self.weight.value.astype(jnp.float32) + self.bias.value.astype(jnp.float32)
+        y = y * self.weight.get_value().astype(jnp.float32) + self.bias.get_value().astype(jnp.float32)
         return y.astype(self.dtype)
 
 

@@ -30,6 +30,7 @@ from flax import nnx
 
 from jax3dc.errors import InputFileError
 from jax3dc.model.config import Qwen3VLConfig
+from jax3dc.model.layers import Dense
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.safetensors_io import iter_tensors, write_safetensors
 from jax3dc.sharding import LOGICAL_RULES, Rules, state_shardings
@@ -165,25 +166,27 @@ def abstract_model(config: Qwen3VLConfig, **model_kwargs) -> Qwen3VL:
 
 
 def param_count(model: Qwen3VL, prefix: str = "") -> int:
-    return sum(math.prod(v.value.shape) for p, v in nnx.to_flat_state(nnx.state(model, nnx.Param))
+    return sum(math.prod(v.get_value().shape) for p, v in nnx.to_flat_state(nnx.state(model, nnx.Param))
                if _path_str(p).startswith(prefix))
 
 
 def load_pretrained(path: str | Path, dtype=jnp.float32, mesh: jax.sharding.Mesh | None = None,
-                    rules: Rules | None = None, **model_kwargs) -> tuple[Qwen3VL, Qwen3VLConfig]:
-    """Builds Qwen3-VL from a HF checkpoint directory with parameters in ``dtype``.
+                    rules: Rules | None = None, *, compute_dtype=None, attention_impl: str | None = None,
+                    remat: bool = False) -> tuple[Qwen3VL, Qwen3VLConfig]:
+    """Builds Qwen3-VL from a HF checkpoint directory with parameters stored in ``dtype``
+    (``compute_dtype``, default the same, is what the layers compute in).
 
-    Each tensor goes from its memory map straight to its target sharding (each device reads
-    only its slice); with no mesh, to the first device. ``model_kwargs`` go to ``Qwen3VL``
-    (e.g. ``dtype=`` for compute is given as ``compute_dtype``, ``attention_impl``, ``remat``).
+    Each tensor goes from its memory map straight to its target sharding on ``mesh`` (from the
+    parameters' logical axes and ``rules``; each device reads only its slice); with no mesh,
+    to the first device. Raises InputFileError on unmapped, duplicate or missing tensors.
     """
     config = read_config(path)
-    compute_dtype = model_kwargs.pop("compute_dtype", dtype)
-    abstract = abstract_model(config, dtype=compute_dtype, param_dtype=dtype, **model_kwargs)
+    abstract = abstract_model(config, dtype=dtype if compute_dtype is None else compute_dtype,
+                              param_dtype=dtype, attention_impl=attention_impl, remat=remat)
     graphdef, state = nnx.split(abstract)
     if mesh is not None:
         shard_state = state_shardings(state, mesh, rules or LOGICAL_RULES)
-        shardings = {_path_str(p): v.value for p, v in nnx.to_flat_state(shard_state)}
+        shardings = {_path_str(p): v.get_value() for p, v in nnx.to_flat_state(shard_state)}
     flat = dict((_path_str(p), v) for p, v in nnx.to_flat_state(state))
     loaded: dict[str, jax.Array] = {}
     device = jax.sharding.SingleDeviceSharding(jax.devices()[0])
@@ -198,7 +201,7 @@ def load_pretrained(path: str | Path, dtype=jnp.float32, mesh: jax.sharding.Mesh
             raise InputFileError(str(path), f"checkpoint tensor {name} -> {ours}, which this config has no room for")
         if ours in loaded:
             raise InputFileError(str(path), f"checkpoint tensor {name} appears twice")
-        target = flat[ours].value
+        target = flat[ours].get_value()
         try:
             host = to_ours(arr, kind, target.shape)
         except ValueError as e:
@@ -213,16 +216,19 @@ def load_pretrained(path: str | Path, dtype=jnp.float32, mesh: jax.sharding.Mesh
     return nnx.merge(graphdef, new_state), config
 
 
+def kernel_input_dims(model: Qwen3VL) -> dict[str, int]:
+    """For each Dense kernel path, how many leading dims are inputs (needed to flatten it back)."""
+    return {_path_str(p) + ".kernel": mod.n_in for p, mod in nnx.iter_graph(model)
+            if isinstance(mod, Dense)}
+
+
 def save_pretrained(model: Qwen3VL, config: Qwen3VLConfig, path: str | Path, dtype=None,
                     max_shard_bytes: int = 5 * 2**30) -> None:
     """Writes config.json and safetensors (sharded with an index above ``max_shard_bytes``)
     that transformers' ``Qwen3VLForConditionalGeneration.from_pretrained`` loads."""
     path = Path(path)
     path.mkdir(parents=True, exist_ok=True)
-    n_in = {}
-    for p, mod in nnx.iter_graph(model):
-        if hasattr(mod, "n_in") and hasattr(mod, "kernel"):
-            n_in[_path_str(p) + ".kernel"] = mod.n_in
+    n_in = kernel_input_dims(model)
     written: list[tuple[Path, list[str]]] = []  # shard files, written as soon as they fill
     shard: dict[str, np.ndarray] = {}
     total = 0
@@ -236,7 +242,7 @@ def save_pretrained(model: Qwen3VL, config: Qwen3VLConfig, path: str | Path, dty
     for p, v in nnx.to_flat_state(nnx.state(model, nnx.Param)):
         ours = _path_str(p)
         hf_name, kind = ours_to_hf_name(ours)
-        arr = np.asarray(jax.device_get(v.value))
+        arr = np.asarray(jax.device_get(v.get_value()))
         if dtype is not None:
             arr = arr.astype(dtype)
         out_dtype = arr.dtype

@@ -101,7 +101,7 @@ class Qwen3VL(nnx.Module):
         if self.lm_head is not None:
             out = self.lm_head(hidden)
         else:
-            emb = self.language_model.embed_tokens.value.astype(self.dtype)
+            emb = self.language_model.embed_tokens.get_value().astype(self.dtype)
             out = jnp.einsum("...e,ve->...v", hidden.astype(self.dtype), emb)
         return constrain(out, ("batch",) + ("length",) * (out.ndim - 2) + ("act_vocab",))
 

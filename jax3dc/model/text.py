@@ -95,5 +95,5 @@ class TextModel(nnx.Module):
         self.norm = RMSNorm(cfg.hidden_size, cfg.rms_norm_eps, "norm", dtype=dtype, param_dtype=param_dtype)
 
     def embed(self, input_ids: jax.Array) -> jax.Array:
-        x = jnp.take(self.embed_tokens.value, input_ids, axis=0).astype(self.dtype)
+        x = jnp.take(self.embed_tokens.get_value(), input_ids, axis=0).astype(self.dtype)
         return constrain(x, ("batch", "length", "act_embed"))

@@ -166,7 +166,7 @@ class VisionModel(nnx.Module):
                              f"{cfg.spatial_merge_size**2}, got {pixel_values.shape}")
         layout = patch_layout(grid_thw, n, cfg.spatial_merge_size, cfg.num_grid_per_side)
         x = self.patch_embed(pixel_values)
-        table = self.pos_embed.value.astype(jnp.float32)
+        table = self.pos_embed.get_value().astype(jnp.float32)
         pos = jnp.sum(table[layout.interp_index] * layout.interp_weight[..., None], axis=1)
         x = constrain(x + pos.astype(x.dtype), ("patches", "act_embed"))
         cos, sin = vision_rope(layout.row, layout.col, cfg.head_dim, cfg.rope_theta)

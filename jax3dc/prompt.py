@@ -1,0 +1,76 @@
+"""The stage-2 prompt (SPEC §3): colour legend, joint count and the target schema, as chat messages.
+
+The legend ties each part id to its colour in the segmentation image S and to its box (centroid
+and extent in the normalised frame), so the model can name parts by id; the schema text tells it
+what to write. ``chat_messages`` gives the turns in the form that a Hugging Face Qwen3-VL
+processor's ``apply_chat_template`` accepts (images I then S, then the text, in the user turn).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from jax3dc.palette import hex_colour, part_colour
+from jax3dc.structure.schema import FAMILIES, JOINT_TYPES, PLANES, Box
+
+LEGEND_HEADER = "Parts (id: colour | centroid | extent):"
+
+INTRO = (
+    "The first image shows an object (or a scene). The second image is its part segmentation: "
+    "every part is one flat colour on a black background."
+)
+
+SCHEMA = (
+    "Write the structure of the object as one JSON object with the keys \"materials\", \"nodes\" and \"relations\".\n"
+    "- \"materials\": {\"<material id>\": {\"family\": F, \"desc\": short description}}, F one of: "
+    + ", ".join(FAMILIES) + ".\n"
+    "- \"nodes\": one entry per part id listed above: {\"<part id>\": {\"parent\": part id or null, "
+    "\"material\": material id}}; a part that moves relative to its parent also has "
+    "\"joint\": {\"type\": " + " or ".join(f'"{t}"' for t in JOINT_TYPES) + ", \"axis\": [x, y, z] unit vector, "
+    "\"pivot\": [x, y, z] a point on the axis, \"range\": [lo, hi] from the pose shown "
+    "(radians for hinge, units for slide)}. The parents form a tree per object; each object root has parent null.\n"
+    "- \"relations\": a list of {\"type\": \"symmetric\", \"a\": id, \"b\": id, \"plane\": "
+    + " or ".join(f'"{p}"' for p in PLANES) + "} (mirror pairs), "
+    "{\"type\": \"instance\", \"a\": id, \"b\": id} (identical copies) and "
+    "{\"type\": \"support\", \"a\": object root id, \"b\": id} (object a rests on part b).\n"
+    "Frame: +Z up, the front faces -Y, the largest extent is 1. Write numbers with 3 decimals."
+)
+
+
+def _fixed3(v: float) -> str:
+    text = f"{float(v):.3f}"
+    return "0.000" if text == "-0.000" else text
+
+
+def legend_line(part_id: int, colour: tuple[int, int, int], box: Box) -> str:
+    """``id: #rrggbb | cx cy cz | ex ey ez`` with 3 decimals."""
+    centroid = " ".join(_fixed3(v) for v in box.centroid)
+    extent = " ".join(_fixed3(v) for v in box.extent)
+    return f"{part_id}: {hex_colour(colour)} | {centroid} | {extent}"
+
+
+def build_prompt(boxes: Mapping[int, Box], palette: np.ndarray, num_joints: int | None) -> str:
+    """The user text of SPEC §3 for parts ``boxes`` coloured by ``palette`` (an object_palette).
+
+    ``num_joints``: the number of joints to predict for an articulated object; None or 0 leaves
+    the ``Joints:`` line out (not articulated, or unknown at inference time).
+    """
+    lines = [INTRO, LEGEND_HEADER]
+    lines += [legend_line(pid, part_colour(palette, pid), boxes[pid]) for pid in sorted(boxes)]
+    if num_joints:
+        lines.append(f"Joints: {int(num_joints)}")
+    lines.append(SCHEMA)
+    return "\n".join(lines)
+
+
+def chat_messages(prompt_text: str, target_json: str | None = None) -> list[dict]:
+    """User turn (image I, image S, prompt text) and, for training, the assistant turn (target JSON)."""
+    messages: list[dict] = [{
+        "role": "user",
+        "content": [{"type": "image"}, {"type": "image"}, {"type": "text", "text": prompt_text}],
+    }]
+    if target_json is not None:
+        messages.append({"role": "assistant", "content": [{"type": "text", "text": target_json}]})
+    return messages
