@@ -131,7 +131,7 @@ def param_logical_axes(variable: Any) -> tuple[str | None, ...]:
     """The logical axes stored on an nnx Variable (``None`` everywhere if it has none)."""
     axes = getattr(variable, "logical_axes", None)
     if axes is None:
-        return (None,) * len(variable.value.shape)
+        return (None,) * len(variable.get_value().shape)
     return tuple(axes)
 
 
@@ -143,7 +143,7 @@ def state_shardings(state: Any, mesh: Mesh, rules: Rules = LOGICAL_RULES) -> Any
     mesh_shape = dict(mesh.shape)
 
     def one(v):
-        spec = logical_to_spec(param_logical_axes(v), v.value.shape, mesh_shape, rules)
+        spec = logical_to_spec(param_logical_axes(v), v.get_value().shape, mesh_shape, rules)
         return v.replace(NamedSharding(mesh, spec))
 
     return jax.tree.map(one, state, is_leaf=lambda x: isinstance(x, nnx.Variable))
