@@ -17,6 +17,7 @@ from jax3dc.errors import Jax3dcError
 COMMAND_MODULES: tuple[str, ...] = (
     "data_pipeline.cli",
     "jax3dc.program.cli",
+    "jax3dc.structure_cli",
     "jax3dc.export.cli",
     "eval.cli",
 )
