@@ -12,10 +12,10 @@ empty ``<label>_joint`` at the pivot whose Z axis is the joint axis; the part em
 and moves only about / along that Z (Limit Rotation / Limit Location constraints in local space,
 plus locked channels in the UI). Child parts hang under their parent's part empty.
 
-Relations: the mesh of part b reuses part a's mesh data (a linked duplicate) when b's vertices
-are a's moved by a translation (``instance``) or reflected in the relation's plane
-(``symmetric``, giving the mesh object a mirroring transform), vertex for vertex; otherwise b
-keeps its own mesh. Every part records its relations in a custom property either way.
+Relations: the mesh of part b reuses part a's mesh data (a linked duplicate) when b's surface is
+a's moved by a translation (``instance``) or reflected in the relation's plane (``symmetric``,
+giving the mesh object a mirroring transform) — same vertices and triangles, in any order, to
+1e-6 of the object size; otherwise (e.g. near-copies of different sizes) b keeps its own mesh. Every part records its relations in a custom property either way.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from scipy.spatial import cKDTree
 
 from jax3dc.export.assembly import assemble, unit_axis
 from jax3dc.export.files import write_files
@@ -63,14 +64,29 @@ def axis_to_z_rotation(axis: np.ndarray) -> np.ndarray:
     return m
 
 
-def _relation_transform(relation, va: np.ndarray, vb: np.ndarray, tol: float) -> np.ndarray | None:
-    """4x4 A with vb ≈ A·va vertex for vertex (a translation, or a reflection in the plane)."""
-    if va.shape != vb.shape:
+def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
+    corners = vertices[faces]
+    return float(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum() / 2)
+
+
+def _relation_transform(relation, va: np.ndarray, fa: np.ndarray, vb: np.ndarray, fb: np.ndarray,
+                        tol: float) -> np.ndarray | None:
+    """4x4 A taking part a's surface onto part b's (a translation, or a reflection in the plane), or None.
+
+    The meshes must be the same point set under A, in any vertex order (a mirrored box lists its
+    corners in another order), with the same surface area: the triangles may split planar faces
+    along other diagonals (a mirrored quad does), which changes neither the look nor the area.
+    """
+    if va.shape != vb.shape or fa.shape != fb.shape:
         return None
     linear = MIRRORS[relation.plane] if relation.type == "symmetric" else np.eye(3)
     moved = va @ linear.T
-    shift = (vb - moved).mean(axis=0)
-    if np.abs(moved + shift - vb).max() > tol:
+    shift = (vb.min(axis=0) + vb.max(axis=0) - moved.min(axis=0) - moved.max(axis=0)) / 2
+    distance, match = cKDTree(vb).query(moved + shift)
+    if distance.max() > tol or len(np.unique(match)) != len(match):
+        return None
+    area_a, area_b = _area(va, fa), _area(vb, fb)
+    if abs(area_a - area_b) > 1e-6 * max(area_a, area_b):
         return None
     a = np.eye(4)
     a[:3, :3], a[:3, 3] = linear, shift
@@ -105,9 +121,7 @@ def blender_plan(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
         a, b = relation.a, relation.b
         if relation.type == "support" or source[b] != b or b in linked_to or source[a] == b:
             continue
-        same_faces = np.array_equal(faces[a], faces[b]) or (
-            relation.type == "symmetric" and np.array_equal(faces[a][:, ::-1], faces[b]))
-        transform = _relation_transform(relation, world_vertices[a], world_vertices[b], tol) if same_faces else None
+        transform = _relation_transform(relation, world_vertices[a], faces[a], world_vertices[b], faces[b], tol)
         if transform is not None:
             source[b], shape[b] = source[a], transform @ shape[a]
             linked_to.add(source[a])

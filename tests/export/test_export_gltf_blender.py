@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from export_cases import CASES, EVIL_NAME
+from export_cases import CASES, EVIL_NAME, box
 from jax3dc.export.assembly import label_of
 from jax3dc.export.blender import blender_plan, blender_script, export_blender
 from jax3dc.export.gltf import export_gltf, gltf_bytes
@@ -157,6 +157,9 @@ def test_blender_relations_become_linked_and_mirrored_duplicates():
     assert by_id[3]["mesh"] == by_id[2]["mesh"] == "2"  # the mirrored door shows the left door's mesh
     assert np.linalg.det(np.asarray(by_id[3]["mesh_basis"])[:3, :3]) == pytest.approx(-1)
     assert "3" not in plan["meshes"]
+    parts[3] = box([0.3, 0.02, 0.6], [0.15, -0.26, 0.1])  # the same door built afresh: corners in another order
+    plan = blender_plan(structure, parts, SCALE)
+    assert [p["mesh"] for p in plan["parts"] if p["id"] == 3] == ["2"]
     structure, parts = CASES["two_roots"]()
     plan = blender_plan(structure, parts, SCALE)
     by_id = {p["id"]: p for p in plan["parts"]}
