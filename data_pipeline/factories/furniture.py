@@ -173,8 +173,7 @@ def desk(w: ProgramWriter, rng: np.random.Generator) -> None:
     for i in range(n):
         z0 = 0.02 + i * row
         kit.drawer(w, pedestal, side_x - ped_w / 2 + kit.EPS, side_x + ped_w / 2 - kit.EPS, z0 + kit.EPS,
-                   z0 + row - kit.EPS, y_front, depth - 0.04 - t - 0.02, t, mat, handle_mat,
-                   (side_x - ped_w / 2 + t, side_x + ped_w / 2 - t, t, ped_h - t))
+                   z0 + row - kit.EPS, y_front, depth - 0.04 - t - 0.02, t, mat, handle_mat, t)
     if rng.random() < 0.5:
         tray_w = width - ped_w - 0.1 - t
         tray_x = (panel_x + (side_x - ped_w / 2 if side_x > 0 else side_x + ped_w / 2)) / 2

@@ -174,7 +174,7 @@ def window(w: ProgramWriter, rng: np.random.Generator) -> None:
             sash, pane = _sash(w, x0 + g, x1 - g, z0 + g, z1 - g, y, t, bar)
             joint = JointSpec("slide", (-1.0, 0.0, 0.0), ((x0 + x1) / 2, y, (z0 + z1) / 2), (0.0, width / 2 - 0.06)) \
                 if moving else None
-            sid = w.part("sash", sash, frame_mat, parent=frame, joint=joint)
+            sid = w.part("sash", sash, frame_mat, parent=frame, joint=joint, twin="sash")
             w.part("pane", pane, pane_mat, parent=sid)
     else:
         mid = (z0 + z1) / 2
@@ -182,7 +182,7 @@ def window(w: ProgramWriter, rng: np.random.Generator) -> None:
             sash, pane = _sash(w, -width / 2 + g, width / 2 - g, za + g, zb - g, y, t, bar)
             joint = JointSpec("slide", (0.0, 0.0, 1.0), (0.0, y, (za + zb) / 2), (0.0, height / 2 - 0.06)) \
                 if moving else None
-            sid = w.part("sash", sash, frame_mat, parent=frame, joint=joint)
+            sid = w.part("sash", sash, frame_mat, parent=frame, joint=joint, twin="sash")
             w.part("pane", pane, pane_mat, parent=sid)
 
 

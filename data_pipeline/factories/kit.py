@@ -109,17 +109,18 @@ def hinged_door(w: ProgramWriter, parent: int, x0: float, x1: float, z0: float, 
 
 
 def drawer(w: ProgramWriter, parent: int, x0: float, x1: float, z0: float, z1: float, y_front: float,
-           depth: float, t: float, material: int, handle_material: int, cavity: tuple[float, float, float, float],
+           depth: float, t: float, material: int, handle_material: int, wall: float,
            handle: str = "bar", twin: str | None = "drawer") -> tuple[int, int]:
     """A drawer (front panel over [x0, x1] x [z0, z1] + open tray) sliding out along -Y, with a handle.
 
-    The tray stays inside `cavity` = (x0, x1, z0, z1), the housing's inner opening, with clearance,
-    so that drawers never intersect the carcass at rest or while sliding.
+    The tray is inset from the front panel by the housing's `wall` thickness plus clearance on
+    every side, so it clears the carcass walls at rest and while sliding, and equal fronts give
+    equal drawers (copies of one design).
     """
     xc, zc = (x0 + x1) / 2, (z0 + z1) / 2
     front = w.box((x1 - x0, t, z1 - z0), (xc, y_front - t / 2, zc))
-    tx0, tx1 = max(x0, cavity[0]) + 0.006, min(x1, cavity[1]) - 0.006
-    tz0, tz1 = max(z0, cavity[2]) + 0.006, min(z1, cavity[3]) - 0.02
+    tx0, tx1 = x0 + wall + 0.006, x1 - wall - 0.006
+    tz0, tz1 = z0 + wall + 0.006, z1 - wall - 0.02
     tray_h = max(tz1 - tz0, 0.02)
     tray = open_top_tray(w, (tx1 - tx0, depth - 0.01, tray_h), ((tx0 + tx1) / 2, y_front + (depth - 0.01) / 2,
                                                                  tz0 + tray_h / 2), 0.01)

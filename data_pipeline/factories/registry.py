@@ -10,7 +10,7 @@ import numpy as np
 import trimesh
 
 from data_pipeline.factories import appliances, furniture, household, shelves, storage
-from data_pipeline.factories.writer import ProgramWriter
+from data_pipeline.factories.writer import Normalised, ProgramWriter
 from jax3dc.errors import Jax3dcError
 from jax3dc.structure.schema import Structure
 
@@ -83,8 +83,8 @@ def object_id(category: str, seed: int) -> str:
     return f"{category}_{seed:06d}"
 
 
-def generate_object(category: str, seed: int) -> GeneratedObject:
-    """Builds one object deterministically: the same (category, seed) gives identical output."""
+def build_normalised(category: str, seed: int) -> Normalised:
+    """Runs one factory: program, parts, structure and the relations the factory intended."""
     if category not in FACTORIES:
         raise Jax3dcError(f"unknown category {category!r}; known: {', '.join(sorted(FACTORIES))}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -92,7 +92,12 @@ def generate_object(category: str, seed: int) -> GeneratedObject:
     rng = np.random.default_rng([int(seed), zlib.crc32(category.encode("utf-8"))])
     writer = ProgramWriter()
     FACTORIES[category].build(writer, rng)
-    out = writer.finish()
+    return writer.finish()
+
+
+def generate_object(category: str, seed: int) -> GeneratedObject:
+    """Builds one object deterministically: the same (category, seed) gives identical output."""
+    out = build_normalised(category, seed)
     return GeneratedObject(
         category=category,
         object_id=object_id(category, int(seed)),

@@ -70,8 +70,9 @@ def simple_bookcase(w: ProgramWriter, rng: np.random.Generator) -> None:
     root = w.part("back_panel", w.box((inner, 0.006, height - 0.02), (0.0, depth / 2 - 0.003, height / 2)), mat)
     for x in (-width / 2 + t / 2, width / 2 - t / 2):
         w.part("side", w.box((t, depth, height), (x, 0.0, height / 2)), mat, parent=root, twin="side")
-    w.part("top", w.box((inner, depth - 0.006, t), (0.0, -0.003, height - t / 2)), mat, parent=root)
-    w.part("bottom", w.box((inner, depth - 0.006, t), (0.0, -0.003, 0.05 + t / 2)), mat, parent=root)
+    # top, bottom and shelves are one board design
+    w.part("top", w.box((inner, depth - 0.006, t), (0.0, -0.003, height - t / 2)), mat, parent=root, twin="shelf")
+    w.part("bottom", w.box((inner, depth - 0.006, t), (0.0, -0.003, 0.05 + t / 2)), mat, parent=root, twin="shelf")
     n = max(2, int((height - 0.1) / u(rng, 0.3, 0.38)) - 1)
     levels = [0.05 + t + (height - 0.05 - 2 * t) * (i + 1) / (n + 1) for i in range(n)]
     shelf_ids = [w.part("shelf", w.box((inner, depth - 0.006, t), (0.0, -0.003, z)), mat, parent=root, twin="shelf")

@@ -47,8 +47,7 @@ def cabinet(w: ProgramWriter, rng: np.random.Generator) -> None:
         for c in range(cols):
             x0 = -width / 2 + c * col_w
             kit.drawer(w, body, x0 + kit.EPS, x0 + col_w - kit.EPS, doors_top + kit.EPS, height - kit.EPS,
-                       -depth / 2, depth - t - 0.02, t, mat, handle_mat,
-                       (-width / 2 + t, width / 2 - t, doors_top + t / 2, height - t), handle)
+                       -depth / 2, depth - t - 0.02, t, mat, handle_mat, t, handle)
     n = int(rng.integers(1, 4))
     _shelves(w, body, width, depth, t, [doors_top * (i + 1) / (n + 1) for i in range(n)], mat)
     _door_pair(w, body, width, 0.0, doors_top, -depth / 2, t, mat, handle_mat, rng, handle=handle)
@@ -71,8 +70,7 @@ def drawer_chest(w: ProgramWriter, rng: np.random.Generator) -> None:
         for c in range(cols):
             x0, z0 = -width / 2 + c * col_w, plinth + r * row_h
             kit.drawer(w, body, x0 + kit.EPS, x0 + col_w - kit.EPS, z0 + kit.EPS, z0 + row_h - kit.EPS,
-                       -depth / 2, depth - t - 0.01, t, mat, handle_mat,
-                       (-width / 2 + t, width / 2 - t, plinth + t, height - t), handle)
+                       -depth / 2, depth - t - 0.01, t, mat, handle_mat, t, handle)
 
 
 def wardrobe(w: ProgramWriter, rng: np.random.Generator) -> None:
@@ -90,8 +88,7 @@ def wardrobe(w: ProgramWriter, rng: np.random.Generator) -> None:
         half = width / 2
         for x0 in (-half, 0.0):
             kit.drawer(w, body, x0 + kit.EPS, x0 + half - kit.EPS, kit.EPS, drawer_h - kit.EPS,
-                       -depth / 2, depth - t - 0.02, t, mat, handle_mat,
-                       (-width / 2 + t, width / 2 - t, t, drawer_h - t / 2))
+                       -depth / 2, depth - t - 0.02, t, mat, handle_mat, t)
     z0 = drawer_h
     g = kit.EPS
     if rng.random() < 0.35:  # sliding doors on two tracks in front of the carcass
@@ -141,8 +138,7 @@ def kitchen_unit(w: ProgramWriter, rng: np.random.Generator) -> None:
         _sink_tap(w, counter, (0.0, hole_y + hole_d / 2 + 0.04, height + top_t), steel)
     else:
         kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, top_of_doors + kit.EPS, height - kit.EPS,
-                   -depth / 2, depth - t - 0.02, t, mat, handle_mat,
-                   (-width / 2 + t, width / 2 - t, plinth + t, height - t), twin=None)
+                   -depth / 2, depth - t - 0.02, t, mat, handle_mat, t, twin=None)
     _shelves(w, body, width, depth, t, [plinth + (top_of_doors - plinth) / 2], mat)
     _door_pair(w, body, width, plinth, top_of_doors, -depth / 2, t, mat, handle_mat, rng)
 
@@ -173,8 +169,7 @@ def nightstand(w: ProgramWriter, rng: np.random.Generator) -> None:
     for i in range(n):
         z0 = leg_h + i * row
         kit.drawer(w, body, -width / 2 + kit.EPS, width / 2 - kit.EPS, z0 + kit.EPS, z0 + row - kit.EPS,
-                   -depth / 2, depth - t - 0.01, t, mat, handle_mat,
-                   (-width / 2 + t, width / 2 - t, leg_h + t, leg_h + box_h - t), handle)
+                   -depth / 2, depth - t - 0.01, t, mat, handle_mat, t, handle)
 
 
 def safe(w: ProgramWriter, rng: np.random.Generator) -> None:

@@ -12,13 +12,14 @@ slide ranges are mapped with the same affine map.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from itertools import combinations
 from typing import Any
 
 import numpy as np
 
 from jax3dc.program import ProgramResult, run_program
+from jax3dc.relations import extract_relations
 from jax3dc.structure.schema import Joint, Material, Node, Relation, Structure
 
 POINT, LENGTH, PLAIN = "point", "length", "plain"
@@ -71,8 +72,9 @@ class PartSpec:
 class Normalised:
     program_text: str
     result: ProgramResult
-    structure: Structure
+    structure: Structure  # relations extracted from the part meshes (jax3dc.relations, SPEC §4)
     scale_m_per_nu: float
+    intended_relations: tuple[Relation, ...]  # what the factory built as copies (twin keys), for checks
 
 
 def fmt(x: float) -> str:
@@ -258,16 +260,18 @@ class ProgramWriter:
                 axis = tuple(float(v) for v in axis / np.linalg.norm(axis))
                 joint = Joint(j.type, axis, pivot, tuple(round(float(v), DECIMALS) for v in rng))
             nodes[p.part_id] = Node(parent=p.parent, material=p.material, joint=joint, name=p.name)
-        relations = twin_relations(self.parts, result)
-        structure = Structure(dict(enumerate(self.materials)), nodes, relations)
-        return Normalised(text, result, structure, 1.0 / scale)
+        bare = Structure(dict(enumerate(self.materials)), nodes, ())
+        structure = replace(bare, relations=extract_relations(bare, result.parts))
+        return Normalised(text, result, structure, 1.0 / scale, twin_relations(self.parts, result))
 
 
 def twin_relations(parts: list[PartSpec], result: ProgramResult) -> tuple[Relation, ...]:
-    """Relations between copies of one design (same `twin` key, same parent), as in SPEC §4.
+    """Relations the factory intends between copies of one design (same `twin` key and parent).
 
-    A pair is `symmetric` when its centroids mirror across a principal plane through the
-    parent's bounding-box centre (the object's centre for roots), else `instance`.
+    The SPEC §4 rule applied to the factory's own knowledge of which parts are copies: a pair is
+    `symmetric` when its centroids mirror across a principal plane through the parent's
+    bounding-box centre (the object's centre for roots), else `instance`. Used to check that
+    the extraction from meshes (jax3dc.relations) finds what was built.
     """
     centres = {pid: (m.bounds[0] + m.bounds[1]) / 2.0 for pid, m in result.parts.items()}
     groups: dict[tuple[str, int | None], list[int]] = {}
