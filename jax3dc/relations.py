@@ -29,7 +29,7 @@ EXTENT_RELATIVE_TOLERANCE = 0.01  # plus this fraction of the extent
 MEASURE_RELATIVE_TOLERANCE = 0.02  # surface area and volume
 MEASURE_TOLERANCE = 1e-6  # nu^2 / nu^3, so that tiny parts compare by their absolute size
 COVARIANCE_DIGITS = 9  # decimals kept of the trace-normalised second-moment matrix
-MIRROR_TOLERANCE = 0.01  # nu; a mirrored centroid this close to the other centroid is a mirror image
+MIRROR_TOLERANCE = 5e-3  # nu; a mirrored centroid this close to the other centroid is a mirror image
 
 PLANE_AXES: tuple[tuple[str, int], ...] = (("yz", 0), ("xz", 1), ("xy", 2))
 

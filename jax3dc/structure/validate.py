@@ -300,7 +300,8 @@ class _Checker:
 
         if part_ids is not None and "nodes" in doc and isinstance(doc["nodes"], Mapping):
             self.part_id_match(node_keys, part_ids)
-        self.tree(set(node_keys))
+        node_set = set(node_keys)
+        self.tree(node_set)
         if material_keys is not None:
             for pid, mid in self.material_refs.items():
                 if mid not in material_keys:
@@ -322,7 +323,7 @@ class _Checker:
                     relations.append(r)
                     if isinstance(doc.get("nodes"), Mapping):
                         for end, pid in (("a", r.a), ("b", r.b)):
-                            if pid not in node_keys:
+                            if pid not in node_set:
                                 self.fail("relation_endpoint", f"relation {k} {end}", f"part {pid} is not a node")
                     if r.a == r.b:
                         self.fail("relation_self", f"relation {k}", f"relation links part {r.a} to itself")
@@ -412,6 +413,8 @@ def _load_text(text: str | bytes, checker: _Checker) -> object:
         checker.fail("json", f"line {e.lineno} column {e.colno}", f"invalid JSON: {e.msg}{hint}")
     except RecursionError:
         checker.fail("json", "", "invalid JSON: nested too deeply")
+    except ValueError as e:  # e.g. an integer literal longer than Python's digit limit
+        checker.fail("json", "", f"invalid JSON: {e}")
     return _UNREADABLE
 
 

@@ -227,6 +227,22 @@ def test_largest_allowed_document_parses_fast():
     assert err.rule == "cycle"
 
 
+def test_huge_integer_literal_is_a_structure_error():
+    (err,) = validate('{"materials": {}, "nodes": ' + "1" * 5000 + "}")
+    assert err.rule == "json" and "digits" in err.message
+    doc = valid_doc()
+    doc["nodes"]["2"]["joint"]["pivot"] = [10**400, 0, 0]  # an int too large for a float
+    assert ("pivot_finite", "node 2 joint.pivot") in rules(doc)
+
+
+def test_many_relations_check_in_linear_time():
+    doc = valid_doc()
+    doc["relations"] = [{"type": "instance", "a": 1 + k % 5, "b": 1 + (k + 1) % 5} for k in range(20000)]
+    t0 = time.perf_counter()
+    assert validate(doc) == []
+    assert time.perf_counter() - t0 < 2.0
+
+
 def test_deeply_nested_json_is_a_structure_error():
     errors = validate("[" * 100000 + "]" * 100000)
     assert errors and errors[0].rule in {"json", "top_level"}
