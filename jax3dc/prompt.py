@@ -12,14 +12,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from jax3dc.palette import hex_colour, part_colour
+from jax3dc.palette import BACKGROUND_RGB, hex_colour, part_colour
 from jax3dc.structure.schema import FAMILIES, JOINT_TYPES, PLANES, Box
 
 LEGEND_HEADER = "Parts (id: colour | centroid | extent):"
 
 INTRO = (
     "The first image shows an object (or a scene). The second image is its part segmentation: "
-    "every part is one flat colour on a black background."
+    f"every part is one flat colour; the background is {hex_colour(BACKGROUND_RGB)}."
 )
 
 SCHEMA = (
