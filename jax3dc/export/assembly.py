@@ -16,7 +16,7 @@ import numpy as np
 import trimesh
 
 from jax3dc.errors import StructureError
-from jax3dc.geometry.mass import MassProperties, mass_properties, solid_of
+from jax3dc.geometry.mass import MassProperties, mass_properties
 from jax3dc.materials import MATERIALS, MaterialProps
 from jax3dc.structure.schema import Joint, Structure
 
@@ -106,7 +106,7 @@ def assemble(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: flo
         parent_frame = frames[node.parent] if node.parent is not None else np.zeros(3)
         vertices = (np.asarray(parts[part_id].vertices, dtype=np.float64) - frame) * scale
         mesh = trimesh.Trimesh(vertices, np.asarray(parts[part_id].faces, dtype=np.int64), process=False)
-        _, solid = solid_of(mesh, MIN_THICKNESS_M)
+        mass = mass_properties(mesh, props.density_kg_m3, 1.0, MIN_THICKNESS_M)
         joint = node.joint
         rng = None
         if joint is not None:
@@ -115,8 +115,7 @@ def assemble(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: flo
         out.append(ExportPart(
             part_id=part_id, label=label_of(part_id, node.name), name=node.name, parent=node.parent,
             joint=joint, range_si=rng, material_id=node.material, family=material.family, props=props,
-            frame_nu=frame, offset_m=(frame - parent_frame) * scale, mesh=mesh, solid=solid,
-            mass=mass_properties(mesh, props.density_kg_m3, 1.0, MIN_THICKNESS_M),
+            frame_nu=frame, offset_m=(frame - parent_frame) * scale, mesh=mesh, solid=mass.solid, mass=mass,
         ))
     return out
 

@@ -24,7 +24,6 @@ from jax3dc.materials import MATERIALS
 from jax3dc.structure.schema import Structure
 
 MESH_DIR = "meshes"
-JOINT_TAGS = {"hinge": "hinge", "slide": "slide"}
 
 
 def mjcf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0, *,
@@ -56,7 +55,7 @@ def mjcf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
         if part.parent is None and free_roots:
             ET.SubElement(body, "freejoint", name=f"free_{part.part_id}")
         if part.joint is not None:
-            ET.SubElement(body, "joint", name=f"joint_{part.part_id}", type=JOINT_TAGS[part.joint.type],
+            ET.SubElement(body, "joint", name=f"joint_{part.part_id}", type=part.joint.type,
                           pos="0 0 0", axis=vec(unit_axis(part.joint)), range=vec(part.range_si), limited="true")
         ET.SubElement(body, "geom", _geom_attributes(part))
     ET.indent(root, space="  ")
