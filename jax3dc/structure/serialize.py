@@ -66,7 +66,7 @@ def joint_to_dict(j: Joint, where: str = "") -> dict:
 
 
 def node_to_dict(pid: int, n: Node, names: bool) -> dict:
-    out: dict = {"parent": n.parent, "material": n.material}
+    out: dict = {"parent": None if n.parent is None else int(n.parent), "material": int(n.material)}
     if n.joint is not None:
         out["joint"] = joint_to_dict(n.joint, f"node {pid}")
     if names and n.name is not None:
@@ -75,7 +75,7 @@ def node_to_dict(pid: int, n: Node, names: bool) -> dict:
 
 
 def relation_to_dict(r: Relation) -> dict:
-    out: dict = {"type": r.type, "a": r.a, "b": r.b}
+    out: dict = {"type": r.type, "a": int(r.a), "b": int(r.b)}
     if r.plane is not None:
         out["plane"] = r.plane
     return out
@@ -87,8 +87,8 @@ def to_dict(s: Structure, names: bool = False) -> dict:
     ``names``: also write each node's semantic ``name`` (metadata; not in the training target).
     """
     return {
-        "materials": {str(i): {"family": m.family, "desc": m.desc} for i, m in sorted(s.materials.items())},
-        "nodes": {str(i): node_to_dict(i, n, names) for i, n in sorted(s.nodes.items())},
+        "materials": {str(int(i)): {"family": m.family, "desc": m.desc} for i, m in sorted(s.materials.items())},
+        "nodes": {str(int(i)): node_to_dict(i, n, names) for i, n in sorted(s.nodes.items())},
         "relations": [relation_to_dict(r) for r in s.relations],
     }
 

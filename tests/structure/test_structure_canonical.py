@@ -195,3 +195,16 @@ def test_missing_box_and_cycle_are_structure_errors():
     with pytest.raises(StructureError) as info:
         canonicalize(cyclic, {i: box(1) for i in (1, 2, 3)})
     assert info.value.rule == "cycle"
+
+
+def test_numpy_scalars_serialise_like_python_numbers():
+    import numpy as np
+
+    plain = Structure(MAT, {1: Node(None, 0), 2: Node(1, 0, hinge((0, 0, 1), (0, 1)))}, (Relation("instance", 1, 2),))
+    numpy = Structure({np.int64(0): Material("Wood", "oak")},
+                      {np.int64(1): Node(None, np.int64(0)),
+                       np.int64(2): Node(np.int64(1), np.int64(0),
+                                         Joint("hinge", tuple(np.array([0.0, 0.0, 1.0])), tuple(np.array([0.1, 0.2, 0.3])),
+                                               (np.float32(0.0), np.float64(1.0))))},
+                      (Relation("instance", np.int64(1), np.int64(2)),))
+    assert to_json(numpy) == to_json(plain)
