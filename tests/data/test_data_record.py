@@ -30,4 +30,4 @@ def test_bad_magic_and_bad_header_raise():
     with pytest.raises(CorruptRecordError, match="magic"):
         decode_record(b"XXXXX" + blob[5:])
     with pytest.raises(CorruptRecordError, match="header"):
-        decode_record(blob[:9] + b"{" + blob[10:])
+        decode_record(blob[:9] + b"!" + blob[10:])
