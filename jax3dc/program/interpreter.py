@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import ast
-import inspect
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -14,7 +13,7 @@ import trimesh
 from jax3dc.errors import ProgramError
 from jax3dc.program.library import FUNCTIONS, MAX_COPIES, ArgumentError, PartCall
 from jax3dc.program.solids import Solid
-from jax3dc.program.syntax import parse_program
+from jax3dc.program.syntax import SIGNATURES, parse_program
 from jax3dc.structure.schema import Material
 
 DEFAULT_MAX_SECONDS = 5.0
@@ -158,7 +157,7 @@ class _Run:
 
     def check_array_size(self, node: ast.Call, fn, args, kwargs) -> None:
         """Refuse an array whose copies would exceed the triangle budget before building it."""
-        bound = inspect.signature(fn).bind(*args, **kwargs)
+        bound = SIGNATURES[node.func.id].bind(*args, **kwargs)
         bound.apply_defaults()
         mesh = bound.arguments["mesh"]
         if not isinstance(mesh, Solid):

@@ -36,6 +36,17 @@ def _segments_cross(p1, p2, q1, q2) -> bool:
     return on(q1, q2, p1) or on(q1, q2, p2) or on(p1, p2, q1) or on(p1, p2, q2)
 
 
+def is_convex(points: np.ndarray) -> bool:
+    """Strictly convex and simple: every turn has the same sense and they add up to one turn."""
+    edges = np.roll(points, -1, axis=0) - points
+    cross = edges[:, 0] * np.roll(edges[:, 1], -1) - edges[:, 1] * np.roll(edges[:, 0], -1)
+    if not (np.all(cross > 1e-14) or np.all(cross < -1e-14)):
+        return False
+    dot = np.einsum("ij,ij->i", edges, np.roll(edges, -1, axis=0))
+    turning = np.abs(np.arctan2(cross, dot)).sum()
+    return bool(abs(turning - 2 * np.pi) < 1e-6)
+
+
 def is_simple(points: np.ndarray) -> bool:
     """No two non-adjacent edges of the closed outline meet."""
     n = len(points)
@@ -63,6 +74,9 @@ def triangulate(points: np.ndarray) -> np.ndarray:
     area = signed_area(pts)
     if abs(area) < 1e-14:
         raise ValueError("the polygon has zero area")
+    if is_convex(pts):  # the common case (circles, boxes): a fan, no O(n^2) checks
+        order = np.arange(n) if area > 0 else np.arange(n)[::-1]
+        return np.stack([np.full(n - 2, order[0]), order[1:-1], order[2:]], axis=1).astype(np.int64)
     if not is_simple(pts):
         raise ValueError("the polygon is not simple (its edges cross)")
     order = list(range(n)) if area > 0 else list(range(n - 1, -1, -1))

@@ -57,6 +57,7 @@ _FORBIDDEN = {
     ast.YieldFrom: "yield is not allowed",
 }
 
+SIGNATURES = {name: inspect.signature(fn) for name, fn in FUNCTIONS.items()}
 ALLOWED_BINOPS = (ast.Add, ast.Sub, ast.Mult, ast.Div)
 ALLOWED_UNARY = (ast.USub, ast.UAdd)
 
@@ -167,7 +168,7 @@ class _Checker:
             _check_name(kw.arg, node)
             self.expression(kw.value)
         try:
-            inspect.signature(FUNCTIONS[name]).bind(*node.args, **{kw.arg: kw.value for kw in node.keywords})
+            SIGNATURES[name].bind(*node.args, **{kw.arg: kw.value for kw in node.keywords})
         except TypeError as exc:
             raise ProgramError(node.lineno, f"{name}(): {exc}") from None
 
