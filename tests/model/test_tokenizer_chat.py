@@ -134,3 +134,21 @@ def test_image_grid_count_mismatch_is_an_error(tokenizer) -> None:
         encode_chat(tokenizer, one_image, np.array([[1, 4, 4], [1, 4, 4]]))
     with pytest.raises(ValueError, match="role"):
         encode_chat(tokenizer, [{"role": "tool", "content": "x"}])
+
+
+def test_stage2_messages_from_prompt_module(hf_processor, tokenizer) -> None:
+    """The project's stage-2 messages (images I and S, prompt, target JSON) encode like transformers."""
+    from jax3dc.prompt import chat_messages
+
+    pictures = images(2)
+    messages = chat_messages(PROMPT, ANSWER)
+    processed = preprocess_images(pictures)
+    ours = encode_chat(tokenizer, messages, processed.image_grid_thw)
+    with_images = [dict(m) for m in messages]
+    items = iter(pictures)
+    with_images[0] = {"role": "user", "content": [
+        {**item, "image": next(items)} if item.get("type") == "image" else item for item in messages[0]["content"]]}
+    expected = hf_processor.apply_chat_template(with_images, tokenize=True, return_dict=True, return_tensors="np")
+    np.testing.assert_array_equal(ours.input_ids, expected["input_ids"][0])
+    carried = ours.labels[ours.labels != IGNORE_INDEX]
+    assert tokenizer.decode(carried, skip_special_tokens=False) == ANSWER + "<|im_end|>"
