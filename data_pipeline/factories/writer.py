@@ -6,7 +6,9 @@ marks copies of one design with a shared `twin` key. `finish` runs the metric pr
 find the bounding box, then re-emits every number in the normalised frame (bbox centre at the
 origin, largest extent 1) — points are shifted and scaled, lengths only scaled, angles and counts
 kept — so the program text is the single source of the geometry, and the structure's pivots and
-slide ranges are mapped with the same affine map.
+slide ranges are mapped with the same affine map. The parts are the meshes of running that text;
+symmetric / instance relations are extracted from them (jax3dc.relations, the SPEC §4 rule), and
+the factory's own twin keys give the relations it intended, which tests compare with the extraction.
 """
 
 from __future__ import annotations
