@@ -14,6 +14,8 @@ import numpy as np
 from jax3dc.program.solids import Solid
 
 _BOX_TOL = 1e-9
+MAX_GRID_CELLS = 1_000_000
+"""Cells of the box-difference grid; each cutter adds up to two planes per axis."""
 
 
 def is_axis_aligned_box(solid: Solid) -> bool:
@@ -32,6 +34,8 @@ def box_difference(base: Solid, cutters: list[Solid]) -> Solid:
         inside = np.clip(np.asarray(values), lo[ax], hi[ax])
         edges.append(np.unique(inside))
     nx, ny, nz = (len(e) - 1 for e in edges)
+    if nx * ny * nz > MAX_GRID_CELLS:
+        raise ValueError(f"too many cutters: their faces cut the box into more than {MAX_GRID_CELLS} cells")
     centres = np.meshgrid(*[(e[:-1] + e[1:]) / 2 for e in edges], indexing="ij")
     filled = np.ones((nx, ny, nz), dtype=bool)
     for c_lo, c_hi in cut_bounds:

@@ -25,6 +25,9 @@ MAX_MAGNITUDE = 1e6
 """Largest absolute number a function accepts (keeps every volume and coordinate finite)."""
 MIN_LENGTH = 1e-9
 """Smallest positive length (radius, depth, size) a function accepts."""
+MAX_PROFILE_POINTS = 256
+MAX_PATH_POINTS = 1024
+"""Point limits keep every single call fast (the time budget is checked between statements)."""
 
 
 class ArgumentError(ValueError):
@@ -84,9 +87,11 @@ def _size(value: Any, what: str) -> np.ndarray:
     return size
 
 
-def _points(value: Any, what: str, dim: int, minimum: int) -> np.ndarray:
+def _points(value: Any, what: str, dim: int, minimum: int, maximum: int = MAX_PROFILE_POINTS) -> np.ndarray:
     if not isinstance(value, tuple) or len(value) < minimum:
         raise ArgumentError(f"{what} must be a list of at least {minimum} points")
+    if len(value) > maximum:
+        raise ArgumentError(f"{what} has {len(value)} points; at most {maximum} are allowed")
     return np.stack([_vector(p, f"{what}[{i}]", dim) for i, p in enumerate(value)])
 
 
@@ -193,7 +198,7 @@ def lathe(profile, center=(0, 0, 0), axis="z", segments=32) -> Solid:
 
 def sweep(path, radius=None, profile=None, segments=16) -> Solid:
     """A circle of `radius` (or a 2-D `profile` polygon) carried along an open polyline `path`."""
-    pts = _points(path, "path", 3, 2)
+    pts = _points(path, "path", 3, 2, MAX_PATH_POINTS)
     if (radius is None) == (profile is None):
         raise ArgumentError("sweep needs exactly one of radius= or profile=")
     if radius is not None:

@@ -19,9 +19,14 @@ def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
 
 
-def _inside_triangle(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> bool:
+def _any_inside_triangle(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> bool:
+    """Whether any of the points [N, 2] lies in the closed counter-clockwise triangle abc."""
     eps = 1e-12
-    return _cross(a, b, p) >= -eps and _cross(b, c, p) >= -eps and _cross(c, a, p) >= -eps
+
+    def side(o, d):
+        return (d[0] - o[0]) * (p[:, 1] - o[1]) - (d[1] - o[1]) * (p[:, 0] - o[0])
+
+    return bool(np.any((side(a, b) >= -eps) & (side(b, c) >= -eps) & (side(c, a) >= -eps)))
 
 
 def _segments_cross(p1, p2, q1, q2) -> bool:
@@ -89,7 +94,8 @@ def triangulate(points: np.ndarray) -> np.ndarray:
             a, b, c = pts[i], pts[j], pts[l]
             if _cross(a, b, c) <= 1e-14:
                 continue  # reflex or degenerate corner: not an ear
-            if any(_inside_triangle(pts[q], a, b, c) for q in order if q not in (i, j, l)):
+            others = pts[[q for q in order if q not in (i, j, l)]]
+            if len(others) and _any_inside_triangle(others, a, b, c):
                 continue
             triangles.append((i, j, l))
             del order[k]

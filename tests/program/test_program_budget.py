@@ -69,3 +69,21 @@ def test_runaway_scaling_is_refused():
     with pytest.raises(ProgramError) as info:
         run_program(text)
     assert info.value.line == 3 and "coordinates" in info.value.message
+
+
+def test_single_calls_are_bounded():
+    """The time budget is checked between statements, so one call must not be able to run long."""
+    import time
+
+    ring = ", ".join(f"({i}, {i % 2})" for i in range(300))
+    cutters = ", ".join(f"box(0.001, center=({i / 1000}, {i / 1000}, {i / 1000}))" for i in range(200))
+    cases = [
+        (f"a = extrude([{ring}], 1)\n", "at most 256"),
+        ("a = sweep([" + ", ".join(f"({i}, 0, 0)" for i in range(2000)) + "], radius=0.1)\n", "at most 1024"),
+        (f"a = difference(box(1), {cutters})\n", "too many cutters"),
+    ]
+    for text, message in cases:
+        start = time.perf_counter()
+        with pytest.raises(ProgramError, match=message):
+            run_program(text)
+        assert time.perf_counter() - start < 5.0
