@@ -85,12 +85,14 @@ class VisionAttention(nnx.Module):
         self.attention_impl = attention_impl
 
     def __call__(self, x: jax.Array, cos: jax.Array, sin: jax.Array, mask: jax.Array) -> jax.Array:
+        """x [N, D]; mask [chunks, 1, c, c] with N = chunks * c (one chunk: plain block mask)."""
         qkv = self.qkv(x)  # [N, 3, heads, hd]
         q, k, v = qkv[:, 0], qkv[:, 1], qkv[:, 2]
         q, k = apply_rotary(q, cos, sin), apply_rotary(k, cos, sin)
-        out = jax.nn.dot_product_attention(q[None], k[None], v[None], mask=mask,
-                                           implementation=self.attention_impl)[0]
-        return self.proj(out)
+        chunks, c = mask.shape[0], mask.shape[-1]
+        q, k, v = (a.reshape(chunks, c, *a.shape[1:]) for a in (q, k, v))
+        out = jax.nn.dot_product_attention(q, k, v, mask=mask, implementation=self.attention_impl)
+        return self.proj(out.reshape(x.shape[0], *out.shape[2:]))
 
 
 class VisionMLP(nnx.Module):
@@ -140,7 +142,13 @@ class PatchMerger(nnx.Module):
 
 
 class VisionModel(nnx.Module):
-    """``__call__(pixel_values, grid_thw) -> (tokens [N/merge², out], [deepstack features …])``."""
+    """``__call__(pixel_values, grid_thw, chunk=None) -> (tokens [N/merge², out], [deepstack …])``.
+
+    ``chunk`` (static int) splits the packed patches into blocks of ``chunk`` patches that attend
+    only within themselves: attention then costs ``N * chunk`` instead of ``N²``. Valid only
+    when no image frame straddles a block boundary, e.g. ``chunk`` = patches per image when all
+    images have the same size (784 for 448 x 448 at patch 16), N a multiple of it.
+    """
 
     def __init__(self, cfg: VisionConfig, *, rngs: nnx.Rngs, dtype=jnp.float32, param_dtype=jnp.float32,
                  attention_impl: str | None = None):
@@ -158,19 +166,25 @@ class VisionModel(nnx.Module):
         self.deepstack_merger_list = nnx.List([PatchMerger(cfg, postshuffle_norm=True, rngs=rngs, **kw)
                                                for _ in cfg.deepstack_visual_indexes])
 
-    def __call__(self, pixel_values: jax.Array, grid_thw: jax.Array) -> tuple[jax.Array, list[jax.Array]]:
+    def __call__(self, pixel_values: jax.Array, grid_thw: jax.Array,
+                 chunk: int | None = None) -> tuple[jax.Array, list[jax.Array]]:
         cfg = self.cfg
         n = pixel_values.shape[0]
         if pixel_values.shape[-1] != cfg.patch_dim or n % cfg.spatial_merge_size**2:
             raise ValueError(f"pixel_values must be [N, {cfg.patch_dim}] with N a multiple of "
                              f"{cfg.spatial_merge_size**2}, got {pixel_values.shape}")
+        chunk = n if chunk is None else chunk
+        if n % chunk or chunk % cfg.spatial_merge_size**2:
+            raise ValueError(f"vision chunk {chunk} must divide the {n} patches and be a multiple of "
+                             f"{cfg.spatial_merge_size**2}")
         layout = patch_layout(grid_thw, n, cfg.spatial_merge_size, cfg.num_grid_per_side)
         x = self.patch_embed(pixel_values)
         table = self.pos_embed.get_value().astype(jnp.float32)
         pos = jnp.sum(table[layout.interp_index] * layout.interp_weight[..., None], axis=1)
         x = constrain(x + pos.astype(x.dtype), ("patches", "act_embed"))
         cos, sin = vision_rope(layout.row, layout.col, cfg.head_dim, cfg.rope_theta)
-        mask = (layout.segment[:, None] == layout.segment[None, :])[None, None]
+        seg = layout.segment.reshape(n // chunk, chunk)
+        mask = (seg[:, :, None] == seg[:, None, :])[:, None]
         deepstack = []
         for i, block in enumerate(self.blocks):
             x = block(x, cos, sin, mask)

@@ -136,3 +136,16 @@ def test_load_onto_a_mesh_places_every_parameter(saved):
     for p, v in nnx.to_flat_state(nnx.state(model, nnx.Param)):
         arr = v.get_value()
         assert isinstance(arr.sharding, jax.sharding.NamedSharding) and arr.sharding.mesh == mesh, p
+
+
+def test_bfloat16_compute_with_float32_parameters(saved):
+    _, _, path = saved
+    m32, _ = load_pretrained(path)
+    m16, _ = load_pretrained(path, dtype=jnp.float32, compute_dtype=jnp.bfloat16)
+    assert all(v.dtype == jnp.float32 for v in flat_params(m16).values())
+    ids = jnp.asarray(np.random.default_rng(0).integers(0, 100, (2, 10)), jnp.int32)
+    fwd = nnx.jit(lambda m, x: m(x))
+    a, b = np.asarray(fwd(m32, ids)), fwd(m16, ids)
+    assert b.dtype == jnp.bfloat16
+    err = np.abs(a - np.asarray(b, np.float32)).max() / np.abs(a).max()
+    assert 0 < err < 3e-2, err  # bf16 rounding shows, but stays small

@@ -134,6 +134,22 @@ def test_vision_tower_and_deepstack_match(pair):
     assert err < TOL, err
 
 
+def test_chunked_vision_attention_equals_full(pair):
+    """Same-size images: attending within 16-patch blocks gives transformers' result."""
+    hf, model, cfg = pair
+    _, _, pixels, grid = make_batch(cfg, [[(4, 4), (4, 4), (4, 4)]])
+    padded = np.zeros((PATCH_BUDGET, pixels.shape[1]), np.float32)
+    padded[: len(pixels)] = pixels
+    tokens, deepstack = nnx.jit(lambda m, p, g: m.visual(p, g, chunk=16))(model, jnp.asarray(padded), jnp.asarray(grid))
+    with torch.no_grad():
+        out = hf.model.visual(torch.tensor(pixels), grid_thw=torch.tensor(grid))
+    n = len(pixels) // cfg.vision.spatial_merge_size**2
+    err = max(rel_err(tokens[:n], out.pooler_output.numpy()),
+              *(rel_err(a[:n], b.numpy()) for a, b in zip(deepstack, out.deepstack_features)))
+    print(f"chunked vision rel err {err:.2e}")
+    assert err < TOL, err
+
+
 def test_text_only_logits_match(pair):
     hf, model, cfg = pair
     ids = np.random.default_rng(1).integers(0, cfg.vision_start_token_id, (2, 12))
@@ -156,12 +172,19 @@ def test_image_logits_match(pair, rows):
     assert err < TOL, err
 
 
-@pytest.mark.parametrize("pad", ["left", "right"])
+@pytest.mark.parametrize("pad", ["left", "right", "right-no-mask"])
 def test_padded_batch_logits_match(pair, pad):
+    """Real tokens match; right padding also without a mask (the training layout)."""
     hf, model, cfg = pair
-    ids, mask, pixels, grid = make_batch(cfg, [[1, (4, 4), 2, (2, 4), 1], [2, (6, 2), 6]], pad=pad)
+    ids, mask, pixels, grid = make_batch(cfg, [[1, (4, 4), 2, (2, 4), 1], [2, (6, 2), 6]], pad=pad.split("-")[0])
     assert (mask == 0).any()
-    ours = our_logits(model, ids, mask, pixels, grid)
+    if pad == "right-no-mask":
+        padded = np.zeros((PATCH_BUDGET, pixels.shape[1]), np.float32)
+        padded[: len(pixels)] = pixels
+        ours = np.asarray(nnx.jit(lambda m, *a: m(a[0], pixel_values=a[1], image_grid_thw=a[2]))(
+            model, jnp.asarray(ids, jnp.int32), jnp.asarray(padded), jnp.asarray(grid, jnp.int32)))
+    else:
+        ours = our_logits(model, ids, mask, pixels, grid)
     err = rel_err(ours, hf_logits(hf, ids, mask, pixels, grid), where=mask.astype(bool))
     print(f"rel err {err:.2e}")
     assert err < TOL, err
