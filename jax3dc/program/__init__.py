@@ -15,9 +15,10 @@ from jax3dc.program.interpreter import (
     run_program,
 )
 from jax3dc.program.library import FUNCTIONS
+from jax3dc.program.reference import language_reference
 from jax3dc.program.syntax import parse_program
 
 __all__ = [
     "Budget", "DEFAULT_MAX_SECONDS", "DEFAULT_MAX_STEPS", "DEFAULT_MAX_TRIANGLES", "FUNCTIONS",
-    "ProgramResult", "parse_program", "run_program", "to_blender_script",
+    "ProgramResult", "language_reference", "parse_program", "run_program", "to_blender_script",
 ]
