@@ -74,6 +74,29 @@ class ImageProcessorConfig:
             image_std=tuple(float(v) for v in raw.get("image_std", default.image_std)),
         )
 
+    def save_pretrained(self, checkpoint_dir: str | os.PathLike) -> str:
+        """Write ``preprocessor_config.json`` in the layout of the released Qwen3-VL checkpoints."""
+        path = os.path.join(checkpoint_dir, "preprocessor_config.json")
+        doc = {
+            "size": {"longest_edge": self.max_pixels, "shortest_edge": self.min_pixels},
+            "patch_size": self.patch_size,
+            "temporal_patch_size": self.temporal_patch_size,
+            "merge_size": self.merge_size,
+            "image_mean": list(self.image_mean),
+            "image_std": list(self.image_std),
+            "do_rescale": True,
+            "rescale_factor": 1.0 / 255.0,
+            "do_normalize": True,
+            "do_convert_rgb": True,
+            "resample": int(Image.Resampling.BICUBIC),
+            "image_processor_type": "Qwen2VLImageProcessor",
+            "processor_class": "Qwen3VLProcessor",
+        }
+        os.makedirs(checkpoint_dir, exist_ok=True)
+        with open(path, "w", encoding="utf-8") as f:
+            json.dump(doc, f, indent=2)
+        return path
+
 
 @dataclass(frozen=True)
 class ProcessedImages:

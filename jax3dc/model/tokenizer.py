@@ -9,7 +9,9 @@ disagrees with the model's ``image_token_id`` etc. would silently produce garbag
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
+import shutil
 from dataclasses import dataclass
 from typing import Iterable, Sequence
 
@@ -26,6 +28,10 @@ QWEN_VL_SPECIAL_IDS: dict[str, int] = {
     "<|vision_end|>": 151653,
     "<|image_pad|>": 151655,
 }
+
+#: Files of a Hugging Face tokenizer that travel with a checkpoint (those present are copied).
+TOKENIZER_FILES = ("tokenizer.json", "tokenizer_config.json", "vocab.json", "merges.txt",
+                   "special_tokens_map.json", "added_tokens.json")
 
 
 @dataclass(frozen=True)
@@ -86,6 +92,27 @@ class Tokenizer:
 
     def decode_batch(self, rows: Sequence[Sequence[int]], skip_special_tokens: bool = True) -> list[str]:
         return [self.decode(row, skip_special_tokens) for row in rows]
+
+    def save_pretrained(self, checkpoint_dir: str | os.PathLike, chat_template: str | None = None) -> None:
+        """Copy the tokenizer files next to a saved model; ``chat_template`` (e.g. chat.VL_CHAT_TEMPLATE)
+        goes to ``chat_template.jinja`` and replaces any template inside ``tokenizer_config.json``,
+        so transformers renders conversations the way we trained on them."""
+        source = os.path.dirname(self.source)
+        os.makedirs(checkpoint_dir, exist_ok=True)
+        for name in TOKENIZER_FILES:
+            if os.path.isfile(os.path.join(source, name)) and name != "tokenizer_config.json":
+                shutil.copyfile(os.path.join(source, name), os.path.join(checkpoint_dir, name))
+        config_path = os.path.join(source, "tokenizer_config.json")
+        if os.path.isfile(config_path):
+            with open(config_path, encoding="utf-8") as f:
+                config = json.load(f)
+            if chat_template is not None:
+                config.pop("chat_template", None)
+            with open(os.path.join(checkpoint_dir, "tokenizer_config.json"), "w", encoding="utf-8") as f:
+                json.dump(config, f, indent=2, ensure_ascii=False)
+        if chat_template is not None:
+            with open(os.path.join(checkpoint_dir, "chat_template.jinja"), "w", encoding="utf-8") as f:
+                f.write(chat_template)
 
     def token_id(self, token: str) -> int:
         found = self._backend.token_to_id(token)

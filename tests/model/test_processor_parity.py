@@ -163,3 +163,15 @@ def test_not_an_image_is_input_file_error(tmp_path) -> None:
 def test_extreme_aspect_ratio_is_input_file_error() -> None:
     with pytest.raises(InputFileError, match="aspect ratio"):
         preprocess_image(random_image(2, 500))
+
+
+def test_saved_config_round_trips_and_loads_in_transformers(tmp_path) -> None:
+    config = ImageProcessorConfig(min_pixels=64 * 64, max_pixels=320 * 320)
+    config.save_pretrained(tmp_path)
+    assert ImageProcessorConfig.from_pretrained(tmp_path) == config
+    hf = Qwen2VLImageProcessorPil.from_pretrained(tmp_path)
+    image = random_image(500, 410, seed=11)
+    expected = hf(images=[image], return_tensors="np")
+    ours = preprocess_image(image, config)
+    np.testing.assert_array_equal(ours.image_grid_thw, expected["image_grid_thw"])
+    np.testing.assert_allclose(ours.pixel_values, expected["pixel_values"], rtol=0, atol=1e-6)

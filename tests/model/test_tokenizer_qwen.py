@@ -78,3 +78,22 @@ def test_wrong_special_id_is_rejected(tmp_path) -> None:
     (tmp_path / "tokenizer.json").write_text(json.dumps(doc))
     with pytest.raises(InputFileError, match=r"<\|image_pad\|>"):
         load_tokenizer(tmp_path)
+
+
+def test_saved_tokenizer_carries_the_vl_template(tmp_path, tokenizer) -> None:
+    from jax3dc.model.chat import VL_CHAT_TEMPLATE, render_chat
+
+    tokenizer.save_pretrained(tmp_path, chat_template=VL_CHAT_TEMPLATE)
+    reloaded = load_tokenizer(tmp_path)
+    assert reloaded.encode(SAMPLES[3]) == tokenizer.encode(SAMPLES[3])
+    hf = AutoTokenizer.from_pretrained(tmp_path)
+    messages = [
+        {"role": "user", "content": [{"type": "image"}, {"type": "text", "text": "describe"}]},
+        {"role": "assistant", "content": "a drawer"},
+    ]
+    assert hf.apply_chat_template(messages, tokenize=False) == render_chat(messages, [1])[0]
+    # the packaged tokenizer's own template is the plain Qwen3 one: it adds a <think> block
+    text_only = [{"role": "user", "content": "describe"}, {"role": "assistant", "content": "a drawer"}]
+    plain = AutoTokenizer.from_pretrained(default_tokenizer_dir()).apply_chat_template(text_only, tokenize=False)
+    assert "<think>" in plain
+    assert hf.apply_chat_template(text_only, tokenize=False) == render_chat(text_only)[0]
