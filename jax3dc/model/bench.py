@@ -1,0 +1,141 @@
+"""Model-level GPU benchmark, comparable with /work/shared/bench/hf_peer.py: random weights,
+bf16 compute, one image of ``--image`` pixels per row.
+
+* train: forward + backward of the mean token NLL w.r.t. the decoder (vision tower frozen:
+  it runs forward only, as in fine-tuning), no optimiser update; tokens/s and TFLOP/s by
+  hf_peer's FLOP formula.
+* decode: prefill a ``--prompt``-token prompt, then ``--new`` greedy decode steps (one jitted
+  step per token, so the figure is an upper bound on per-token latency); tokens/s per batch size.
+
+    python3 -m jax3dc.model.bench --preset qwen3_vl_4b --batch 4 --length 2048 --impl cudnn --remat
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import nnx
+
+from jax3dc.model.config import Qwen3VLConfig
+from jax3dc.model.qwen3_vl import Qwen3VL
+
+
+def image_batch(cfg: Qwen3VLConfig, rows: int, length: int, image: int, seed: int = 0):
+    """input_ids with one image per row at the start, pixel_values and grids (as the processor)."""
+    v = cfg.vision
+    g = image // v.patch_size
+    n_tok = g * g // v.spatial_merge_size**2
+    rng = np.random.default_rng(seed)
+    ids = rng.integers(0, 150000 if cfg.text.vocab_size > 150000 else cfg.text.vocab_size // 2,
+                       (rows, length)).astype(np.int32)
+    ids[:, 0] = cfg.vision_start_token_id
+    ids[:, 1:1 + n_tok] = cfg.image_token_id
+    ids[:, 1 + n_tok] = cfg.vision_end_token_id
+    pixels = rng.standard_normal((rows * g * g, v.patch_dim)).astype(np.float32)
+    grid = np.tile(np.array([[1, g, g]], np.int32), (rows, 1))
+    return jnp.asarray(ids), jnp.asarray(pixels, jnp.bfloat16), jnp.asarray(grid), g * g, n_tok
+
+
+def timed(fn, *args, repeat: int) -> float:
+    jax.block_until_ready(fn(*args))
+    t0 = time.perf_counter()
+    for _ in range(repeat):
+        out = fn(*args)
+    jax.block_until_ready(out)
+    return (time.perf_counter() - t0) / repeat
+
+
+def bench_train(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, length: int, image: int, repeat: int) -> dict:
+    ids, pixels, grid, patches, n_tok = image_batch(cfg, rows, length, image)
+    graphdef, decoder, rest = nnx.split(model, lambda path, _: path[0] != "visual", ...)
+
+    @jax.jit
+    def grads(decoder, rest, ids, pixels, grid):
+        def loss(decoder):
+            m = nnx.merge(graphdef, decoder, rest)
+            hidden = m(ids, pixel_values=pixels, image_grid_thw=grid, return_hidden=True, vision_chunk=patches)
+            logits = m.logits(hidden[:, :-1]).astype(jnp.float32)
+            nll = -jnp.take_along_axis(jax.nn.log_softmax(logits), ids[:, 1:, None], axis=-1)
+            return nll.mean()
+        return jax.value_and_grad(loss)(decoder)
+
+    t0 = time.perf_counter()
+    jax.block_until_ready(grads(decoder, rest, ids, pixels, grid))
+    compile_s = time.perf_counter() - t0
+    dt = timed(grads, decoder, rest, ids, pixels, grid, repeat=repeat)
+    t = cfg.text
+    layer = (t.hidden_size * t.head_dim * (t.num_attention_heads * 2 + t.num_key_value_heads * 2)
+             + 3 * t.hidden_size * t.intermediate_size)
+    n_vis = sum(int(np.prod(x.shape)) for x in jax.tree.leaves(nnx.state(model.visual)))
+    flops = (6 * (t.num_hidden_layers * layer + t.hidden_size * t.vocab_size)
+             + 6 * t.num_hidden_layers * length * t.num_attention_heads * t.head_dim) * rows * length
+    flops += 2 * n_vis * patches * rows
+    return {"train_rows": rows, "train_length": length, "train_compile_s": round(compile_s, 1),
+            "train_step_s": round(dt, 4), "train_tokens_per_s": round(rows * length / dt),
+            "train_tflops": round(flops / dt / 1e12, 1)}
+
+
+def bench_decode(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, prompt: int, new: int, image: int) -> dict:
+    ids, pixels, grid, patches, _ = image_batch(cfg, rows, prompt, image)
+    prefill = nnx.jit(lambda m, i, p, g: m.prefill(i, None, p, g, max_length=prompt + new, vision_chunk=patches))
+    step = nnx.jit(lambda m, t, c, d: m.decode_step(t, c, d), donate_argnums=2)
+    t0 = time.perf_counter()
+    logits, cache, deltas = prefill(model, ids, pixels, grid)
+    jax.block_until_ready(logits)
+    prefill_first_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    logits, cache, deltas = prefill(model, ids, pixels, grid)
+    jax.block_until_ready(logits)
+    prefill_s = time.perf_counter() - t0
+    tok = jnp.argmax(logits, -1).astype(jnp.int32)
+    logits, cache = step(model, tok, cache, deltas)  # compile
+    jax.block_until_ready(logits)
+    t0 = time.perf_counter()
+    for _ in range(new - 1):
+        tok = jnp.argmax(logits, -1).astype(jnp.int32)
+        logits, cache = step(model, tok, cache, deltas)
+    jax.block_until_ready(logits)
+    dt = time.perf_counter() - t0
+    return {f"decode_b{rows}_prefill_compile_s": round(prefill_first_s - prefill_s, 1),
+            f"decode_b{rows}_prefill_s": round(prefill_s, 3),
+            f"decode_b{rows}_tokens_per_s": round(rows * (new - 1) / dt, 1)}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--preset", default="qwen3_vl_4b", help="Qwen3VLConfig preset name")
+    ap.add_argument("--batch", type=int, default=4, help="rows of the training step")
+    ap.add_argument("--length", type=int, default=2048, help="tokens per training row")
+    ap.add_argument("--image", type=int, default=448, help="image side in pixels (one image per row)")
+    ap.add_argument("--impl", default="xla", choices=["xla", "cudnn"], help="attention implementation")
+    ap.add_argument("--remat", action="store_true", help="recompute each decoder layer in the backward pass")
+    ap.add_argument("--decode-batches", default="1,32", help="comma-separated batch sizes for decoding ('' = skip)")
+    ap.add_argument("--prompt", type=int, default=600, help="prompt tokens for decoding")
+    ap.add_argument("--new", type=int, default=512, help="new tokens per decoding run")
+    ap.add_argument("--repeat", type=int, default=5, help="timed training steps")
+    ap.add_argument("--out", help="write the figures as JSON here too")
+    args = ap.parse_args(argv)
+    cfg = getattr(Qwen3VLConfig, args.preset)()
+    res: dict = {"preset": args.preset, "impl": args.impl, "remat": args.remat, "device": str(jax.devices()[0])}
+    model = nnx.jit(lambda: Qwen3VL(cfg, rngs=nnx.Rngs(0), dtype=jnp.bfloat16, param_dtype=jnp.bfloat16,
+                                    attention_impl=args.impl, remat=args.remat))()
+    res.update(bench_train(model, cfg, args.batch, args.length, args.image, args.repeat))
+    print(json.dumps(res), flush=True)
+    decode_model = nnx.jit(lambda: Qwen3VL(cfg, rngs=nnx.Rngs(0), dtype=jnp.bfloat16, param_dtype=jnp.bfloat16))()
+    del model
+    for b in [int(x) for x in args.decode_batches.split(",") if x]:
+        res.update(bench_decode(decode_model, cfg, b, args.prompt, args.new, args.image))
+        print(json.dumps(res), flush=True)
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump(res, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
