@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
+from jax3dc.model.qwen3_vl import KVCache
 from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS
 
 
@@ -61,7 +62,7 @@ class Prefilled(NamedTuple):
     """What the decode loop starts from: last-token logits, the filled cache, rope offsets."""
 
     logits: jax.Array  # [B, V]
-    cache: object  # qwen3_vl.KVCache
+    cache: KVCache
     rope_deltas: jax.Array  # [B]
 
 
@@ -110,7 +111,7 @@ def _prefill(graphdef, state, input_ids, attention_mask, pixel_values, image_gri
 
 @partial(jax.jit, static_argnames=("graphdef", "config"), donate_argnames=("cache",))
 def _decode(graphdef, state, logits: jax.Array, cache, rope_deltas: jax.Array, key: jax.Array,
-            config: GenerationConfig) -> tuple[Generated, object]:
+            config: GenerationConfig) -> tuple[Generated, KVCache]:
     """Returns the final cache too, only so the donated prefill cache can alias it in place."""
     model = nnx.merge(graphdef, state)
     batch = logits.shape[0]
@@ -163,6 +164,10 @@ def prefill(model, input_ids, attention_mask=None, pixel_values=None, image_grid
 def decode(model, prefilled: Prefilled, config: GenerationConfig = GenerationConfig(),
            key: jax.Array | None = None) -> Generated:
     """Jitted decode loop from a prefilled cache (the cache buffers are donated)."""
+    needed = int(prefilled.cache.length) + config.max_new_tokens - 1
+    if needed > prefilled.cache.valid.shape[1]:
+        raise ValueError(f"cache holds {prefilled.cache.valid.shape[1]} slots, {config.max_new_tokens} new tokens "
+                         f"need {needed}: prefill with max_new_tokens >= {config.max_new_tokens}")
     graphdef, state = nnx.split(model)
     key = jax.random.key(0) if key is None else key
     generated, _ = _decode(graphdef, state, prefilled.logits, prefilled.cache, prefilled.rope_deltas, key, config)

@@ -139,3 +139,12 @@ def test_generation_config_rejects_nonsense() -> None:
         GenerationConfig(top_p=0.0)
     with pytest.raises(ValueError):
         GenerationConfig(temperature=-1.0)
+
+
+def test_decode_refuses_a_cache_too_small(tiny) -> None:
+    from jax3dc.model.generate import decode, prefill
+
+    model, config = tiny
+    state = prefill(model, np.array([[1, 2, 3]]), max_new_tokens=4)
+    with pytest.raises(ValueError, match="prefill with max_new_tokens >= 5"):
+        decode(model, state, GenerationConfig(max_new_tokens=5, stop_ids=(), pad_id=0))
