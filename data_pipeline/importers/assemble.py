@@ -19,6 +19,7 @@ from data_pipeline.importers.kinematic_tree import KinematicTree, reduce_to_part
 from data_pipeline.importers.material_guess import DEFAULT_FAMILY, guess_family
 from jax3dc.errors import InputFileError
 from jax3dc.geometry.parts import part_boxes
+from jax3dc.relations import with_extracted_relations
 from jax3dc.structure import canonicalize
 from jax3dc.structure.schema import Box, Joint, Material, Node, Structure
 
@@ -115,5 +116,9 @@ def assemble(
 
 
 def finish_structure(structure: Structure, parts: dict[int, trimesh.Trimesh], boxes: dict[int, Box]) -> Structure:
-    """Canonical form (SPEC §2)."""
-    return canonicalize(structure, boxes)
+    """Canonical form (SPEC §2) with the symmetric / instance relations found in the part meshes.
+
+    Relations are extracted after re-rooting, since they hold between siblings of the final tree;
+    the second canonicalisation only orders them (it changes nothing else the second time).
+    """
+    return canonicalize(with_extracted_relations(canonicalize(structure, boxes), parts), boxes)

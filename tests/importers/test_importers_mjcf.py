@@ -165,3 +165,21 @@ def test_round_trip_through_the_mjcf_exporter(tmp_path, name):
             np.testing.assert_allclose(new.joint.range, old.joint.range, atol=1e-6)
             offset = np.asarray(new.joint.pivot) - np.asarray(old.joint.pivot)
             assert np.linalg.norm(np.cross(offset, old.joint.axis)) < 2e-3
+
+
+def test_mirrored_and_repeated_parts_become_relations(tmp_path):
+    """Two equal handles mirrored across x = 0 (plane yz) and two equal feet off-centre in x."""
+    text = """<mujoco><worldbody><body name="chest"><geom type="box" size="0.5 0.3 0.4"/>
+      <body name="handle_left" pos="-0.3 -0.32 0.2"><geom type="box" size="0.08 0.02 0.02"/></body>
+      <body name="handle_right" pos="0.3 -0.32 0.2"><geom type="box" size="0.08 0.02 0.02"/></body>
+      <body name="foot_a" pos="0.1 0 -0.45"><geom type="cylinder" size="0.05 0.05"/></body>
+      <body name="foot_b" pos="0.3 0 -0.45"><geom type="cylinder" size="0.05 0.05"/></body>
+    </body></worldbody></mujoco>"""
+    path = tmp_path / "chest.xml"
+    path.write_text(text)
+    obj = import_object(path)
+    ids = {v: int(k) for k, v in obj.meta["part_links"].items()}
+    got = {(r.type, r.a, r.b, r.plane) for r in obj.structure.relations}
+    left, right = sorted((ids["handle_left"], ids["handle_right"]))
+    a, b = sorted((ids["foot_a"], ids["foot_b"]))
+    assert got == {("symmetric", left, right, "yz"), ("instance", a, b, None)}
