@@ -101,7 +101,7 @@ def assemble(
         "scale_note": scale_note,
         "front": front,
         "normalisation": {
-            "turn_about_z": _rounded(turn.ravel()),
+            "turn_about_z": [_rounded(row) for row in turn],  # source frame -> object frame rotation
             "centre": _rounded(centre),
             "source_units_per_nu": units_per_nu,
         },
