@@ -22,7 +22,6 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 import jax
-import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 MESH_AXES = ("data", "fsdp", "tensor")
@@ -155,6 +154,3 @@ def model_shardings(abstract_model: Any, mesh: Mesh, rules: Rules = LOGICAL_RULE
 
     return state_shardings(nnx.state(abstract_model), mesh, rules)
 
-
-def describe(mesh: Mesh) -> str:
-    return " x ".join(f"{k}={v}" for k, v in mesh.shape.items()) + f" ({np.prod(list(mesh.shape.values()))} devices)"
