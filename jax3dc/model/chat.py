@@ -16,6 +16,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from jax3dc.model.processor import image_token_counts
 from jax3dc.model.tokenizer import Tokenizer
 
 IGNORE_INDEX = -100
@@ -83,14 +84,14 @@ def _render_content(content: str | Sequence[Mapping[str, Any]], pads: list[int],
 
 def render_chat(
     messages: Sequence[Mapping[str, Any]],
-    image_token_counts: Sequence[int] = (),
+    pad_counts: Sequence[int] = (),
     add_generation_prompt: bool = False,
 ) -> tuple[str, list[tuple[int, int]]]:
     """Prompt text with image pads expanded, and the character spans that carry loss.
 
     A span covers one assistant message's content plus its ``<|im_end|>``.
     """
-    pads = [int(n) for n in image_token_counts]
+    pads = [int(n) for n in pad_counts]
     text, spans = [], []
     length = 0
     for index, message in enumerate(messages):
@@ -113,11 +114,6 @@ def render_chat(
     if add_generation_prompt:
         text.append(f"{IM_START}assistant\n")
     return "".join(text), spans
-
-
-def image_token_counts(image_grid_thw: np.ndarray | Sequence[Sequence[int]], merge_size: int) -> list[int]:
-    """Pad tokens per image: the merger turns merge_size x merge_size patches into one token."""
-    return [int(np.prod(grid)) // merge_size**2 for grid in np.asarray(image_grid_thw).reshape(-1, 3)]
 
 
 def encode_chat(

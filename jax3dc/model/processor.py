@@ -107,7 +107,12 @@ class ProcessedImages:
 
     def num_tokens(self, merge_size: int) -> list[int]:
         """Number of ``<|image_pad|>`` tokens each image occupies in the prompt."""
-        return [int(np.prod(g)) // merge_size**2 for g in self.image_grid_thw]
+        return image_token_counts(self.image_grid_thw, merge_size)
+
+
+def image_token_counts(image_grid_thw: np.ndarray | Sequence[Sequence[int]], merge_size: int) -> list[int]:
+    """Pad tokens per image: the merger turns merge_size x merge_size patches into one token."""
+    return [int(np.prod(grid)) // merge_size**2 for grid in np.asarray(image_grid_thw).reshape(-1, 3)]
 
 
 def smart_resize(height: int, width: int, factor: int, min_pixels: int, max_pixels: int) -> tuple[int, int]:
