@@ -11,6 +11,8 @@ import trimesh
 
 from data_pipeline.importers.source import import_object
 
+FIXTURES = Path(__file__).parents[2].parent / "shared" / "fixtures" / "partnet_mobility"
+
 CABINET = """<mujoco model="cabinet">
   <compiler angle="degree" meshdir="meshes"/>
   <asset>
@@ -135,9 +137,6 @@ def test_several_joints_in_one_body_keep_the_hinge(tmp_path):
     (child, j), = obj.structure.joints().items()
     assert j.type == "hinge" and j.range == pytest.approx((0.0, 6.0))
     assert any("twist" in w and "lift" in w for w in obj.meta["warnings"])
-
-
-FIXTURES = Path(__file__).parents[2].parent / "shared" / "fixtures" / "partnet_mobility"
 
 
 @pytest.mark.parametrize("name", ["microwave_7119", "drawer_20453", "safe_rotate_101593"])
