@@ -146,6 +146,8 @@ def load_image(path: str | os.PathLike) -> Image.Image:
         raise InputFileError(str(path), "image file not found") from err
     except UnidentifiedImageError as err:
         raise InputFileError(str(path), "not an image file (format not recognised)") from err
+    except Image.DecompressionBombError as err:
+        raise InputFileError(str(path), f"image too large: {err}") from err
     except (OSError, SyntaxError, ValueError) as err:
         # Truncated / corrupt data surfaces as OSError ("image file is truncated") or SyntaxError.
         raise InputFileError(str(path), f"corrupt image data: {err}") from err
