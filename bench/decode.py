@@ -104,6 +104,7 @@ def run_batch(model, preset: Preset, batch: int, generation: GenerationConfig, p
         lengths = np.asarray(jax.block_until_ready(out.lengths))
         return middle - start, time.perf_counter() - middle, lengths
 
+    print(f"batch {batch}: compiling and warming up", file=sys.stderr, flush=True)
     once()  # compile prefill and decode for these shapes
     prefill_s, decode_s, lengths = once()
     generated = int(lengths.sum())
@@ -135,13 +136,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--dtype", choices=("bfloat16", "float32"), default="bfloat16",
                         help="parameter and compute dtype")
     parser.add_argument("--json-out", help="also append the JSON lines to this file")
+    parser.add_argument("--compile-cache", help="persistent XLA compilation cache folder (faster reruns)")
     args = parser.parse_args(argv)
+    if args.compile_cache:
+        jax.config.update("jax_compilation_cache_dir", args.compile_cache)
 
     preset = PRESETS[args.preset]
     batches = tuple(sorted(args.batch or preset.batches))
     generation = GenerationConfig(max_new_tokens=args.new_tokens or preset.new_tokens, stop_ids=())
     prefill_rows = args.prefill_rows or preset.prefill_rows
 
+    print(f"building {args.preset} with random {args.dtype} weights", file=sys.stderr, flush=True)
     start = time.perf_counter()
     model = build_model(preset.config, jnp.dtype(args.dtype))
     jax.block_until_ready(nnx.state(model))
