@@ -121,11 +121,13 @@ def dishwasher(w: ProgramWriter, rng: np.random.Generator) -> None:
     door_top = height - 0.005
     body = w.part("body", _cavity_body(w, width, depth, height, wall, base + wall, height - wall), shell)
     g, door_t = kit.EPS, 0.05
+    # shown with the door folded down, so that the racks can slide out over it; closing is -90 degrees
+    hinge = (0.0, -depth / 2, base)
     door = w.box((width - 2 * g, door_t, door_top - base), (0.0, -depth / 2 - door_t / 2, (base + door_top) / 2))
-    door_id = w.part("door", door, shell, parent=body,
-                     joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, -depth / 2, base), (0.0, 1.571)))
+    door_id = w.part("door", w.rotate(door, 90.0, "x", hinge), shell, parent=body,
+                     joint=JointSpec("hinge", (1.0, 0.0, 0.0), hinge, (-1.571, 0.0)))
     handle = kit.bar_handle(w, 0.0, -depth / 2 - door_t, door_top - panel_h / 2, width * 0.5, vertical=False)
-    w.part("handle", handle, handle_mat, parent=door_id)
+    w.part("handle", w.rotate(handle, 90.0, "x", hinge), handle_mat, parent=door_id)
     inner_w, inner_d = width - 2 * wall - 0.02, depth - wall - 0.04
     span = height - wall - (base + wall)
     for level in (0.15, 0.6):
@@ -151,7 +153,7 @@ def washing_machine(w: ProgramWriter, rng: np.random.Generator) -> None:
     y_front = -depth / 2
     ring = w.torus(r, 0.03, (0.0, y_front - 0.03, cz), axis="y", major_segments=32, minor_segments=8)
     door_id = w.part("door", ring, ring_mat, parent=body,
-                     joint=JointSpec("hinge", (0.0, 0.0, -1.0), (-r - 0.03, y_front, cz), (0.0, u(rng, 1.6, 2.0))))
+                     joint=JointSpec("hinge", (0.0, 0.0, -1.0), (-r - 0.03, y_front - 0.03, cz), (0.0, u(rng, 1.6, 2.0))))
     w.part("window", w.cylinder(r - 0.03, 0.02, (0.0, y_front - 0.03, cz), axis="y", segments=32), pane,
            parent=door_id)
     tray = w.box((dw, depth * 0.5, dh), (dx, y_front + depth * 0.25 - 0.005, dz))
@@ -169,14 +171,13 @@ def _top_loader(w, rng, width, depth, height, shell, lid_mat, knob_mat) -> None:
     opening = min(width, depth - console_d) * 0.76  # square, so the housing is an exact box difference
     drum_box = w.box((opening, opening, 0.4), (0.0, -console_d / 2, height - 0.2))
     body = w.part("body", w.difference(w.box((width, depth, height), (0.0, 0.0, height / 2)), drum_box), shell)
-    lid_d = depth - console_d - 0.02
+    lid_d = depth - console_d - 0.035  # 25 mm short of the console: room for the lid standing open
     lid = w.box((width - 0.04, lid_d, 0.02), (0.0, -depth / 2 + 0.01 + lid_d / 2, height + 0.01))
     hinge_y = -depth / 2 + 0.01 + lid_d
     w.part("lid", lid, lid_mat, parent=body,
-           joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, hinge_y, height), (0.0, u(rng, 1.4, 1.8))))
+           joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, hinge_y, height), (0.0, u(rng, 1.3, 1.55))))
     console = w.box((width, console_d, console_h), (0.0, depth / 2 - console_d / 2, height + console_h / 2))
     console_id = w.part("control_panel", console, shell, parent=body)
-    kx, kz = width / 2 - 0.1, height + console_h / 2
-    y_face = depth / 2 - console_d
-    w.part("program_knob", kit.knob(w, kx, y_face, kz, 0.025, 0.02), knob_mat, parent=console_id,
-           joint=JointSpec("hinge", (0.0, -1.0, 0.0), (kx, y_face - 0.01, kz), kit.full_turn()))
+    kx, ky, kz = width / 2 - 0.1, depth / 2 - console_d / 2, height + console_h + 0.01  # on top, clear of the lid
+    w.part("program_knob", w.cylinder(0.025, 0.02, (kx, ky, kz), segments=16), knob_mat, parent=console_id,
+           joint=JointSpec("hinge", (0.0, 0.0, 1.0), (kx, ky, kz), kit.full_turn()))

@@ -33,19 +33,23 @@ def laptop(w: ProgramWriter, rng: np.random.Generator) -> None:
     shell, keys, screen = (w.material("Metal", kit.pick(rng, ("silver aluminium", "space grey aluminium"))),
                            w.material("Plastic", "black keycaps"), w.material("Glass", "glossy display"))
     base = w.part("base", w.bevel((width, depth, base_h), 0.003, (0.0, 0.0, base_h / 2)), shell)
-    w.part("keyboard", w.box((width * 0.85, depth * 0.4, 0.002), (0.0, depth * 0.08, base_h + 0.001)), keys, parent=base)
+    w.part("keyboard", w.box((width * 0.85, depth * 0.4, 0.002), (0.0, depth * 0.08, base_h + 0.001)), keys,
+           parent=base)
     w.part("touchpad", w.box((width * 0.3, depth * 0.25, 0.001), (0.0, -depth * 0.3, base_h + 0.0005)), keys,
            parent=base)
     opened = u(rng, 95.0, 130.0)
-    lid_t = 0.006
-    hinge = (0.0, depth / 2, base_h)
-    lid = w.rotate(w.box((width, depth, lid_t), (0.0, 0.0, base_h + lid_t / 2)), -opened, "x", hinge)
+    lid_t, keys_h = 0.006, 0.002
+    rest = base_h + keys_h  # closed, the lid rests on the keyboard
+    hinge = (0.0, depth / 2, rest)
+    shell_box = w.box((width, depth, lid_t), (0.0, 0.0, rest + lid_t / 2))
+    recess = w.box((width * 0.9, depth * 0.85, 0.0025), (0.0, 0.0, rest + 0.00025))  # open towards the keys
+    lid = w.rotate(w.difference(shell_box, recess), -opened, "x", hinge)
     lid_range = (-round(math.radians(170.0 - opened), 3), round(math.radians(opened), 3))
     lid_id = w.part("screen_lid", lid, shell, parent=base,
                     joint=JointSpec("hinge", (1.0, 0.0, 0.0), hinge, lid_range))
-    # the display sits 0.2 mm off the lid's inner face: rounding in the program never makes them overlap
-    panel = w.rotate(w.box((width * 0.9, depth * 0.85, 0.002), (0.0, 0.0, base_h - 0.0012)), -opened, "x", hinge)
-    w.part("display", panel, screen, parent=lid_id)
+    # the display lies in the recess, 0.2 mm clear of its faces so rounding never makes them overlap
+    panel = w.box((width * 0.9 - 0.0004, depth * 0.85 - 0.0004, 0.001), (0.0, 0.0, rest + 0.0008))
+    w.part("display", w.rotate(panel, -opened, "x", hinge), screen, parent=lid_id)
 
 
 def toilet(w: ProgramWriter, rng: np.random.Generator) -> None:
@@ -66,13 +70,14 @@ def toilet(w: ProgramWriter, rng: np.random.Generator) -> None:
     seat = w.scale(w.torus(bowl_r * 0.8, bowl_r * 0.2, (0.0, 0.0, bowl_h + seat_half), major_segments=32,
                            minor_segments=8), (1.0, stretch, 0.35), (0.0, 0.0, bowl_h + seat_half))
     seat_top = bowl_h + 2 * seat_half
-    w.part("seat", seat, seat_mat, parent=bowl_id,
-           joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, back - 0.02, seat_top), (0.0, 1.75)))
+    # up to 83 degrees: the raised seat and lid stay clear of the tank and its lever
+    seat_id = w.part("seat", seat, seat_mat, parent=bowl_id,
+                     joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, back - 0.02, seat_top), (0.0, 1.45)))
     lid_t = 0.015
     lid = w.scale(w.cylinder(bowl_r, lid_t, (0.0, 0.0, seat_top + lid_t / 2), segments=32), (1.0, stretch, 1.0),
                   (0.0, 0.0, seat_top))
-    w.part("lid", lid, seat_mat, parent=bowl_id,
-           joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, back - 0.01, seat_top + lid_t), (0.0, 1.75)))
+    w.part("lid", lid, seat_mat, parent=seat_id,  # lies on the seat: raising the seat raises the lid too
+           joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, back - 0.01, seat_top + lid_t), (0.0, 1.45)))
     lever_x = -tank_w / 2 + 0.05
     lever_z = bowl_h + tank_h - 0.12
     lever_y = tank_y - tank_d / 2
@@ -227,11 +232,11 @@ def lamp(w: ProgramWriter, rng: np.random.Generator) -> None:
                    joint=JointSpec("hinge", (1.0, 0.0, 0.0), p0, (-0.6, 0.6)))
     pin = w.cylinder(0.012, 0.03, p1, axis="x", segments=12)
     upper = w.part("upper_arm", w.combine(pin, kit.rod(w, p1, p2, 0.008)), metal, parent=lower,
-                   joint=JointSpec("hinge", (1.0, 0.0, 0.0), p1, (-1.0, 1.0)))
+                   joint=JointSpec("hinge", (1.0, 0.0, 0.0), p1, (-0.8, 0.3)))  # +: the head drops
     shade_h, shade_r = u(rng, 0.1, 0.16), u(rng, 0.06, 0.1)
     shade = w.cone(shade_r, shade_r * 0.3, shade_h, (0.0, p2[1], p2[2] - shade_h / 2 - 0.011), segments=24)
     w.part("shade", shade, shade_mat, parent=upper,  # pivots about the top of the shade, under the arm's end
-           joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, p2[1], p2[2] - 0.011), (-0.8, 0.8)))
+           joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, p2[1], p2[2] - 0.011), (-0.6, 0.6)))
 
 
 def suitcase(w: ProgramWriter, rng: np.random.Generator) -> None:

@@ -102,8 +102,11 @@ def wardrobe(w: ProgramWriter, rng: np.random.Generator) -> None:
                           joint=JointSpec("slide", (toward, 0.0, 0.0), ((x0 + x1) / 2, y_back - t / 2, (z0 + height) / 2),
                                           (0.0, travel)))
             grip_x = x0 + 0.06 if side == "left" else x1 - 0.06
-            w.part("handle", kit.bar_handle(w, grip_x, y_back - t, (z0 + height) / 2, 0.3, vertical=True,
-                                            standoff=0.015), handle_mat, parent=door)
+            if track:  # the outer door's handle stands off its face
+                grip = kit.bar_handle(w, grip_x, y_back - t, (z0 + height) / 2, 0.3, vertical=True, standoff=0.015)
+            else:  # the inner door's grip is a flat strip, thinner than the gap to the outer track
+                grip = w.box((0.02, 0.0012, 0.3), (grip_x, y_back - t - 0.0006, (z0 + height) / 2))
+            w.part("handle", grip, handle_mat, parent=door)
         return
     opening = u(rng, 1.5, 2.0)
     kit.hinged_door(w, body, -width / 2 + g, -g, z0 + g, height - g, -depth / 2, t, "left", mat, handle_mat, opening)
