@@ -167,7 +167,8 @@ def _as_pil(image: ImageLike) -> tuple[Image.Image, str]:
         return image, "<image>"
     if isinstance(image, np.ndarray):
         if image.dtype != np.uint8 or image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] not in (1, 3, 4)):
-            raise InputFileError("<array>", f"expected uint8 HxW, HxWx1, HxWx3 or HxWx4 array, got {image.dtype} {image.shape}")
+            raise InputFileError(
+                "<array>", f"expected uint8 HxW, HxWx1, HxWx3 or HxWx4 array, got {image.dtype} {image.shape}")
         arr = image[..., 0] if image.ndim == 3 and image.shape[2] == 1 else image
         return Image.fromarray(arr), "<array>"
     return load_image(image), str(image)

@@ -79,7 +79,8 @@ def test_stop_token_ends_a_row_and_pads_the_rest(tiny) -> None:
     rng = np.random.default_rng(5)
     prompts = [rng.integers(0, config.vision_start_token_id, n).tolist() for n in (6, 3)]
     ids, mask = left_pad(prompts, pad_id=0)
-    free = np.asarray(generate(model, ids, mask, config=GenerationConfig(max_new_tokens=NEW, stop_ids=(), pad_id=0)).tokens)
+    unstopped = GenerationConfig(max_new_tokens=NEW, stop_ids=(), pad_id=0)
+    free = np.asarray(generate(model, ids, mask, config=unstopped).tokens)
     stop = int(free[0, 3])
     first = int(np.flatnonzero(free[0] == stop)[0])
     out = generate(model, ids, mask, config=GenerationConfig(max_new_tokens=NEW, stop_ids=(stop,), pad_id=127))

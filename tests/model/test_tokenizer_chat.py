@@ -96,7 +96,8 @@ def test_generation_prompt_token_identical(hf_processor, tokenizer) -> None:
 
 def test_labels_cover_exactly_the_answer_and_im_end(tokenizer) -> None:
     pictures = images()
-    encoded = encode_chat(tokenizer, training_messages(pictures, system=True), preprocess_images(pictures).image_grid_thw)
+    grid = preprocess_images(pictures).image_grid_thw
+    encoded = encode_chat(tokenizer, training_messages(pictures, system=True), grid)
     carried = np.flatnonzero(encoded.labels != IGNORE_INDEX)
     assert (np.diff(carried) == 1).all()  # one contiguous run
     assert tokenizer.decode(encoded.labels[carried], skip_special_tokens=False) == ANSWER + "<|im_end|>"
