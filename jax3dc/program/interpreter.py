@@ -29,6 +29,10 @@ MAX_COORDINATE = 1e9
 
 @dataclass(frozen=True)
 class Budget:
+    """Limits on one run; exceeding any is a ProgramError naming the line. Model output is
+    untrusted, so every run has one (time is checked between statements; single calls are
+    kept short by the library's size limits)."""
+
     max_seconds: float = DEFAULT_MAX_SECONDS
     max_triangles: int = DEFAULT_MAX_TRIANGLES
     max_steps: int = DEFAULT_MAX_STEPS
