@@ -33,7 +33,6 @@ from flax import nnx  # noqa: E402
 from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
 from jax3dc.model.generate import GenerationConfig, decode, prefill, prefill_in_chunks  # noqa: E402
 from jax3dc.model.params import param_count  # noqa: E402
-from jax3dc.model.processor import ImageProcessorConfig, preprocess_images  # noqa: E402
 from jax3dc.model.qwen3_vl import Qwen3VL  # noqa: E402
 
 
@@ -63,25 +62,30 @@ def build_model(config: Qwen3VLConfig, dtype) -> Qwen3VL:
 
 
 def build_prompts(preset: Preset, batch: int, seed: int = 0):
-    """``batch`` prompts of ``prompt_tokens`` ids, each with its own random image in the middle."""
+    """``batch`` prompts of ``prompt_tokens`` ids, each with its own image in the middle.
+
+    Pixel values are random numbers in the normalised range [-1, 1] (image preprocessing is not
+    what is measured, and this keeps the benchmark free of PIL): an ``image_side`` square image
+    is ``image_side / patch_size`` patches a side, already a multiple of the merge size.
+    """
     config, vision = preset.config, preset.config.vision
-    processor = ImageProcessorConfig(
-        patch_size=vision.patch_size, temporal_patch_size=vision.temporal_patch_size,
-        merge_size=vision.spatial_merge_size, min_pixels=vision.patch_size**2, max_pixels=preset.image_side**2)
-    rng = np.random.default_rng(seed)
-    images = [rng.integers(0, 256, (preset.image_side, preset.image_side, 3), dtype=np.uint8) for _ in range(batch)]
-    processed = preprocess_images(images, processor)
-    (pads,) = set(processed.num_tokens(vision.spatial_merge_size))
+    side = preset.image_side // vision.patch_size
+    if preset.image_side % vision.patch_size or side % vision.spatial_merge_size:
+        raise ValueError(f"image side {preset.image_side} is not a multiple of patch x merge size")
+    pads = side * side // vision.spatial_merge_size**2
     text = preset.prompt_tokens - pads - 2
     if text < 2:
         raise ValueError(f"prompt of {preset.prompt_tokens} tokens cannot hold {pads} image tokens")
+    rng = np.random.default_rng(seed)
+    pixels = rng.uniform(-1.0, 1.0, (batch * side * side, vision.patch_dim)).astype(np.float32)
+    grid = np.tile(np.array([[1, side, side]], np.int32), (batch, 1))
     ids = np.empty((batch, preset.prompt_tokens), np.int32)
     for row in range(batch):
         words = rng.integers(0, config.vision_start_token_id, text)
         ids[row] = np.concatenate([words[: text // 4], [config.vision_start_token_id],
                                    np.full(pads, config.image_token_id), [config.vision_end_token_id],
                                    words[text // 4:]])
-    return ids, processed.pixel_values, processed.image_grid_thw, pads
+    return ids, pixels, grid, pads
 
 
 def peak_bytes() -> int | None:
