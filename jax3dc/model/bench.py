@@ -58,7 +58,7 @@ def bench_train(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, length: int, imag
     def grads(decoder, rest, ids, pixels, grid):
         def loss(decoder):
             m = nnx.merge(graphdef, decoder, rest)
-            hidden = m(ids, pixel_values=pixels, image_grid_thw=grid, return_hidden=True, vision_chunk=patches)
+            hidden = m(ids, pixel_values=pixels, image_grid_thw=grid, return_hidden=True, vision_window=patches)
             logits = m.logits(hidden[:, :-1]).astype(jnp.float32)
             nll = -jnp.take_along_axis(jax.nn.log_softmax(logits), ids[:, 1:, None], axis=-1)
             return nll.mean()
@@ -82,7 +82,7 @@ def bench_train(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, length: int, imag
 
 def bench_decode(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, prompt: int, new: int, image: int) -> dict:
     ids, pixels, grid, patches, _ = image_batch(cfg, rows, prompt, image)
-    prefill = nnx.jit(lambda m, i, p, g: m.prefill(i, None, p, g, max_length=prompt + new, vision_chunk=patches))
+    prefill = nnx.jit(lambda m, i, p, g: m.prefill(i, None, p, g, max_length=prompt + new, vision_window=patches))
     step = nnx.jit(lambda m, t, c, d: m.decode_step(t, c, d), donate_argnums=2)
     t0 = time.perf_counter()
     logits, cache, deltas = prefill(model, ids, pixels, grid)

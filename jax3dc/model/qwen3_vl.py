@@ -12,8 +12,9 @@ Forward pass (training / scoring)::
 * ``pixel_values [N, C*T*P*P]`` and ``image_grid_thw [n_images, 3]``: transformers' processor
   output (see vision.py; N may be padded to a fixed budget).
 * ``position_ids [3, B, L]`` optional; computed like transformers' ``get_rope_index`` if absent.
-* ``vision_chunk`` (static int): attend within blocks of that many patches instead of over all
-  packed patches (see vision.py); set it to the patches per image when all images share a size.
+* ``vision_window`` (static int >= the patches of the largest image; images only): each image
+  attends in its own window instead of over all packed patches (see vision.py). Leave it
+  ``None`` only for few images: full packed attention costs ``N²`` for N patches in the batch.
 * Right-padded batches (training) may pass ``attention_mask=None``: real tokens never attend to
   the padding after them, so their logits are unchanged, and attention stays purely causal.
 * ``return_hidden=True`` returns the final-norm hidden states ``[B, L, E]`` instead of logits
@@ -109,7 +110,7 @@ class Qwen3VL(nnx.Module):
             out = jnp.einsum("...e,ve->...v", hidden.astype(self.dtype), emb)
         return constrain(out, ("batch",) + ("length",) * (out.ndim - 2) + ("act_vocab",))
 
-    def _inputs(self, input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_chunk):
+    def _inputs(self, input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_window):
         """Embeddings with image features placed, DeepStack features, image mask, rope ids."""
         cfg = self.config
         x = self.language_model.embed(input_ids)
@@ -118,7 +119,7 @@ class Qwen3VL(nnx.Module):
         if pixel_values is not None:
             if image_grid_thw is None:
                 raise ValueError("pixel_values given without image_grid_thw")
-            tokens, deepstack = self.visual(pixel_values, image_grid_thw, vision_chunk)
+            tokens, deepstack = self.visual(pixel_values, image_grid_thw, vision_window)
             x = place_image_tokens(x, image_mask, tokens, add=False)
         deltas = None
         if position_ids is None:
@@ -143,9 +144,9 @@ class Qwen3VL(nnx.Module):
     def __call__(self, input_ids: jax.Array, attention_mask: jax.Array | None = None,
                  pixel_values: jax.Array | None = None, image_grid_thw: jax.Array | None = None,
                  position_ids: jax.Array | None = None, return_hidden: bool = False,
-                 vision_chunk: int | None = None) -> jax.Array:
+                 vision_window: int | None = None) -> jax.Array:
         x, deepstack, image_mask, position_ids, _ = self._inputs(
-            input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_chunk)
+            input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_window)
         t = self.config.text
         cos, sin = text_rope(position_ids, t.head_dim, t.rope_theta, t.mrope_section)
         mask = None
@@ -166,7 +167,7 @@ class Qwen3VL(nnx.Module):
     def prefill(self, input_ids: jax.Array, attention_mask: jax.Array | None = None,
                 pixel_values: jax.Array | None = None, image_grid_thw: jax.Array | None = None,
                 max_length: int | None = None,
-                vision_chunk: int | None = None) -> tuple[jax.Array, KVCache, jax.Array]:
+                vision_window: int | None = None) -> tuple[jax.Array, KVCache, jax.Array]:
         """Runs the prompt, fills a new cache of capacity ``max_length`` (static) and returns the
         logits of each row's last real token ``[B, V]``, the cache and ``rope_deltas [B]``."""
         b, seq = input_ids.shape
@@ -175,7 +176,7 @@ class Qwen3VL(nnx.Module):
             raise ValueError(f"max_length {max_length} < prompt length {seq}")
         valid = jnp.ones((b, seq), bool) if attention_mask is None else attention_mask.astype(bool)
         x, deepstack, image_mask, position_ids, deltas = self._inputs(
-            input_ids, valid, pixel_values, image_grid_thw, None, vision_chunk)
+            input_ids, valid, pixel_values, image_grid_thw, None, vision_window)
         t = self.config.text
         cos, sin = text_rope(position_ids, t.head_dim, t.rope_theta, t.mrope_section)
         cache = self.init_cache(b, max_length)

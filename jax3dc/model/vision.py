@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from flax import nnx
 
 from jax3dc.model.config import VisionConfig
@@ -29,6 +30,7 @@ class PatchLayout:
     """Per-patch facts derived from the grids (all ``[N]`` or ``[N, 4]``, traceable)."""
 
     segment: jax.Array  # attention segment (one per frame of each image; padding: its own)
+    index_in_frame: jax.Array  # position of the patch in its frame's packed order
     row: jax.Array  # patch row within its image
     col: jax.Array  # patch column within its image
     interp_index: jax.Array  # [N, 4] taps into the learned position table
@@ -73,7 +75,29 @@ def patch_layout(grid_thw: jax.Array, num_patches: int, merge: int, side: int) -
     w_tap, w_w = taps(col, w[img])
     index = (h_tap[:, :, None] * side + w_tap[:, None, :]).reshape(-1, 4)
     weight = (h_w[:, :, None] * w_w[:, None, :]).reshape(-1, 4)
-    return PatchLayout(segment, row, col, index, weight)
+    return PatchLayout(segment, within, row, col, index, weight)
+
+
+@dataclass(frozen=True)
+class AttentionPlan:
+    """Which patches attend to which. Without ``slot``: one block-diagonal ``mask [1, 1, N, N]``.
+    With ``slot``: each frame's patches are scattered into their own row of ``window`` slots
+    (patch -> ``slot``; out of range = padding, dropped) and attend there under
+    ``mask [frames, 1, window, window]``: cost ``frames * window²`` instead of ``N²``."""
+
+    mask: jax.Array
+    slot: jax.Array | None = None
+
+
+def attention_plan(layout: PatchLayout, n_frames: int, window: int | None) -> AttentionPlan:
+    seg = layout.segment
+    if window is None:
+        return AttentionPlan((seg[:, None] == seg[None, :])[None, None])
+    inside = (seg < n_frames) & (layout.index_in_frame < window)
+    slot = jnp.where(inside, seg * window + layout.index_in_frame, n_frames * window)
+    filled = jnp.zeros(n_frames * window, bool).at[slot].set(True, mode="drop").reshape(n_frames, window)
+    mask = filled[:, None, :] | jnp.eye(window, dtype=bool)[None]  # empty slots see themselves only
+    return AttentionPlan(mask[:, None], slot)
 
 
 class VisionAttention(nnx.Module):
@@ -84,15 +108,24 @@ class VisionAttention(nnx.Module):
         self.proj = Dense((n, hd), (d,), ("vision_heads", "head_dim"), ("vision_embed",), use_bias=True, **kw)
         self.attention_impl = attention_impl
 
-    def __call__(self, x: jax.Array, cos: jax.Array, sin: jax.Array, mask: jax.Array) -> jax.Array:
-        """x [N, D]; mask [chunks, 1, c, c] with N = chunks * c (one chunk: plain block mask)."""
+    def __call__(self, x: jax.Array, cos: jax.Array, sin: jax.Array, plan: AttentionPlan) -> jax.Array:
         qkv = self.qkv(x)  # [N, 3, heads, hd]
         q, k, v = qkv[:, 0], qkv[:, 1], qkv[:, 2]
         q, k = apply_rotary(q, cos, sin), apply_rotary(k, cos, sin)
-        chunks, c = mask.shape[0], mask.shape[-1]
-        q, k, v = (a.reshape(chunks, c, *a.shape[1:]) for a in (q, k, v))
-        out = jax.nn.dot_product_attention(q, k, v, mask=mask, implementation=self.attention_impl)
-        return self.proj(out.reshape(x.shape[0], *out.shape[2:]))
+        if plan.slot is None:
+            out = jax.nn.dot_product_attention(q[None], k[None], v[None], mask=plan.mask,
+                                               implementation=self.attention_impl)[0]
+        else:
+            frames, window = plan.mask.shape[0], plan.mask.shape[-1]
+
+            def rows(a):
+                flat = jnp.zeros((frames * window, *a.shape[1:]), a.dtype).at[plan.slot].set(a, mode="drop")
+                return flat.reshape(frames, window, *a.shape[1:])
+
+            out = jax.nn.dot_product_attention(rows(q), rows(k), rows(v), mask=plan.mask,
+                                               implementation=self.attention_impl)
+            out = out.reshape(frames * window, *out.shape[2:])[jnp.minimum(plan.slot, frames * window - 1)]
+        return self.proj(out)
 
 
 class VisionMLP(nnx.Module):
@@ -114,8 +147,8 @@ class VisionBlock(nnx.Module):
         self.attn = VisionAttention(cfg, rngs=rngs, attention_impl=attention_impl, **kw)
         self.mlp = VisionMLP(cfg, rngs=rngs, **kw)
 
-    def __call__(self, x, cos, sin, mask):
-        x = x + self.attn(self.norm1(x), cos, sin, mask)
+    def __call__(self, x, cos, sin, plan: AttentionPlan):
+        x = x + self.attn(self.norm1(x), cos, sin, plan)
         return x + self.mlp(self.norm2(x))
 
 
@@ -142,12 +175,12 @@ class PatchMerger(nnx.Module):
 
 
 class VisionModel(nnx.Module):
-    """``__call__(pixel_values, grid_thw, chunk=None) -> (tokens [N/merge², out], [deepstack …])``.
+    """``__call__(pixel_values, grid_thw, window=None) -> (tokens [N/merge², out], [deepstack …])``.
 
-    ``chunk`` (static int) splits the packed patches into blocks of ``chunk`` patches that attend
-    only within themselves: attention then costs ``N * chunk`` instead of ``N²``. Valid only
-    when no image frame straddles a block boundary, e.g. ``chunk`` = patches per image when all
-    images have the same size (784 for 448 x 448 at patch 16), N a multiple of it.
+    ``window`` (static int, images only: every grid has t = 1) must be at least the patches of
+    the largest image (784 for 448 x 448 at patch 16); then each image attends in its own row
+    of ``window`` slots, costing ``n_images * window²`` instead of ``N²`` for the packed batch.
+    Patches beyond ``window`` would be dropped: the bound is checked when the grid is concrete.
     """
 
     def __init__(self, cfg: VisionConfig, *, rngs: nnx.Rngs, dtype=jnp.float32, param_dtype=jnp.float32,
@@ -166,28 +199,36 @@ class VisionModel(nnx.Module):
         self.deepstack_merger_list = nnx.List([PatchMerger(cfg, postshuffle_norm=True, rngs=rngs, **kw)
                                                for _ in cfg.deepstack_visual_indexes])
 
+    @staticmethod
+    def _check_window(grid_thw, window: int) -> None:
+        """Under jit the grid is abstract and this check cannot run; eagerly it does."""
+        try:
+            g = np.asarray(grid_thw).reshape(-1, 3)
+        except jax.errors.TracerArrayConversionError:
+            return
+        if (g[:, 0] != 1).any() or (g[:, 1] * g[:, 2]).max() > window:
+            raise ValueError(f"vision window {window} needs single-frame images of at most {window} "
+                             f"patches, got grids {g.tolist()}")
+
     def __call__(self, pixel_values: jax.Array, grid_thw: jax.Array,
-                 chunk: int | None = None) -> tuple[jax.Array, list[jax.Array]]:
+                 window: int | None = None) -> tuple[jax.Array, list[jax.Array]]:
         cfg = self.cfg
         n = pixel_values.shape[0]
         if pixel_values.shape[-1] != cfg.patch_dim or n % cfg.spatial_merge_size**2:
             raise ValueError(f"pixel_values must be [N, {cfg.patch_dim}] with N a multiple of "
                              f"{cfg.spatial_merge_size**2}, got {pixel_values.shape}")
-        chunk = n if chunk is None else chunk
-        if n % chunk or chunk % cfg.spatial_merge_size**2:
-            raise ValueError(f"vision chunk {chunk} must divide the {n} patches and be a multiple of "
-                             f"{cfg.spatial_merge_size**2}")
+        if window is not None:
+            self._check_window(grid_thw, window)
         layout = patch_layout(grid_thw, n, cfg.spatial_merge_size, cfg.num_grid_per_side)
         x = self.patch_embed(pixel_values)
         table = self.pos_embed.get_value().astype(jnp.float32)
         pos = jnp.sum(table[layout.interp_index] * layout.interp_weight[..., None], axis=1)
         x = constrain(x + pos.astype(x.dtype), ("patches", "act_embed"))
         cos, sin = vision_rope(layout.row, layout.col, cfg.head_dim, cfg.rope_theta)
-        seg = layout.segment.reshape(n // chunk, chunk)
-        mask = (seg[:, :, None] == seg[:, None, :])[:, None]
+        plan = attention_plan(layout, jnp.shape(grid_thw)[0], window)
         deepstack = []
         for i, block in enumerate(self.blocks):
-            x = block(x, cos, sin, mask)
+            x = block(x, cos, sin, plan)
             if i in cfg.deepstack_visual_indexes:
                 merger = self.deepstack_merger_list[cfg.deepstack_visual_indexes.index(i)]
                 deepstack.append(merger(x))

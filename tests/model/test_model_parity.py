@@ -134,20 +134,22 @@ def test_vision_tower_and_deepstack_match(pair):
     assert err < TOL, err
 
 
-def test_chunked_vision_attention_equals_full(pair):
-    """Same-size images: attending within 16-patch blocks gives transformers' result."""
+def test_windowed_vision_attention_matches(pair):
+    """Images of different sizes, each attending in its own 24-slot window, padded patch budget."""
     hf, model, cfg = pair
-    _, _, pixels, grid = make_batch(cfg, [[(4, 4), (4, 4), (4, 4)]])
+    _, _, pixels, grid = make_batch(cfg, [[(4, 4), (2, 6), (4, 6)]])
     padded = np.zeros((PATCH_BUDGET, pixels.shape[1]), np.float32)
     padded[: len(pixels)] = pixels
-    tokens, deepstack = nnx.jit(lambda m, p, g: m.visual(p, g, chunk=16))(model, jnp.asarray(padded), jnp.asarray(grid))
+    tokens, deepstack = nnx.jit(lambda m, p, g: m.visual(p, g, window=24))(model, jnp.asarray(padded), jnp.asarray(grid))
     with torch.no_grad():
         out = hf.model.visual(torch.tensor(pixels), grid_thw=torch.tensor(grid))
     n = len(pixels) // cfg.vision.spatial_merge_size**2
     err = max(rel_err(tokens[:n], out.pooler_output.numpy()),
               *(rel_err(a[:n], b.numpy()) for a, b in zip(deepstack, out.deepstack_features)))
-    print(f"chunked vision rel err {err:.2e}")
+    print(f"windowed vision rel err {err:.2e}")
     assert err < TOL, err
+    with pytest.raises(ValueError, match="window"):
+        model.visual(jnp.asarray(padded), grid, window=16)  # a 24-patch image does not fit
 
 
 def test_text_only_logits_match(pair):
@@ -280,7 +282,8 @@ def test_kv_cache_decoding_matches_full_forward_and_transformers_generate(pair):
 
     padded = np.zeros((PATCH_BUDGET, pixels.shape[1]), np.float32)
     padded[: len(pixels)] = pixels
-    prefill = nnx.jit(lambda m, *a: m.prefill(*a, max_length=ids.shape[1] + new))
+    # prefill with per-image vision windows, the full forward below without: both paths agree
+    prefill = nnx.jit(lambda m, *a: m.prefill(*a, max_length=ids.shape[1] + new, vision_window=16))
     decode = nnx.jit(lambda m, t, c, d: m.decode_step(t, c, d))
     logits, cache, deltas = prefill(model, jnp.asarray(ids, jnp.int32), jnp.asarray(mask),
                                     jnp.asarray(padded), jnp.asarray(grid, jnp.int32))
