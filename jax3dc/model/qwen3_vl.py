@@ -127,14 +127,15 @@ class Qwen3VL(nnx.Module):
                                                   cfg.vision.spatial_merge_size, attention_mask)
         return x, deepstack, image_mask, position_ids, deltas
 
-    def _layers(self, x, cos, sin, mask, deepstack, image_mask, caches=None, write_index=None):
+    def _layers(self, x, cos, sin, mask, deepstack, image_mask, caches=None, write_index=None, from_cache=True):
         new_caches = []
         for i, layer in enumerate(self.language_model.layers):
             cache = None if caches is None else caches[i]
             if self.remat:
-                x, cache = nnx.remat(DecoderLayer.__call__)(layer, x, cos, sin, mask, cache, write_index)
+                x, cache = nnx.remat(DecoderLayer.__call__, static_argnums=(7,))(
+                    layer, x, cos, sin, mask, cache, write_index, from_cache)
             else:
-                x, cache = layer(x, cos, sin, mask, cache, write_index)
+                x, cache = layer(x, cos, sin, mask, cache, write_index, from_cache)
             new_caches.append(cache)
             if i < len(deepstack):
                 x = place_image_tokens(x, image_mask, deepstack[i], add=True)
@@ -180,10 +181,11 @@ class Qwen3VL(nnx.Module):
         t = self.config.text
         cos, sin = text_rope(position_ids, t.head_dim, t.rope_theta, t.mrope_section)
         cache = self.init_cache(b, max_length)
-        key_valid = jnp.zeros((b, max_length), bool).at[:, :seq].set(valid)
-        mask = _attention_mask(key_valid, jnp.arange(seq), jnp.arange(max_length))
+        mask = _attention_mask(valid, jnp.arange(seq), jnp.arange(seq))
         hidden, layer_caches = self._layers(x, cos, sin, mask, deepstack, image_mask,
-                                            list(zip(cache.keys, cache.values)), jnp.zeros((), jnp.int32))
+                                            list(zip(cache.keys, cache.values)), jnp.zeros((), jnp.int32),
+                                            from_cache=False)
+        key_valid = jnp.zeros((b, max_length), bool).at[:, :seq].set(valid)
         last = jnp.max(jnp.where(valid, jnp.arange(seq), 0), axis=1)
         last_hidden = jnp.take_along_axis(hidden, last[:, None, None], axis=1)[:, 0]
         cache = KVCache(tuple(k for k, _ in layer_caches), tuple(v for _, v in layer_caches),

@@ -2,8 +2,8 @@
 
 Layers take precomputed rotary cos/sin (from the multimodal position ids) and a boolean
 attention mask, and optionally one layer's slice of the KV cache (see qwen3_vl.py for the
-cache layout): new keys/values are written at ``write_index`` and attention runs over the
-whole cache.
+cache layout): new keys/values are written at ``write_index``; a decode step then attends over
+the whole cache, a prefill (``from_cache=False``) only over its own keys, which are all there is.
 """
 
 from __future__ import annotations
@@ -34,7 +34,8 @@ class TextAttention(nnx.Module):
 
     def __call__(self, x: jax.Array, cos: jax.Array, sin: jax.Array, mask: jax.Array | None,
                  cache: LayerCache | None = None,
-                 write_index: jax.Array | None = None) -> tuple[jax.Array, LayerCache | None]:
+                 write_index: jax.Array | None = None,
+                 from_cache: bool = True) -> tuple[jax.Array, LayerCache | None]:
         q = apply_rotary(self.q_norm(self.q_proj(x)), cos, sin)
         k = apply_rotary(self.k_norm(self.k_proj(x)), cos, sin)
         v = self.v_proj(x)
@@ -43,7 +44,8 @@ class TextAttention(nnx.Module):
             k_all = jax.lax.dynamic_update_slice_in_dim(cache[0], k.astype(cache[0].dtype), write_index, axis=1)
             v_all = jax.lax.dynamic_update_slice_in_dim(cache[1], v.astype(cache[1].dtype), write_index, axis=1)
             cache = (k_all, v_all)
-            k, v = k_all.astype(q.dtype), v_all.astype(q.dtype)
+            if from_cache:
+                k, v = k_all.astype(q.dtype), v_all.astype(q.dtype)
         out = jax.nn.dot_product_attention(q, k, v, mask=mask, is_causal=mask is None,
                                            implementation=self.attention_impl)
         out = self.o_proj(out)
@@ -72,8 +74,8 @@ class DecoderLayer(nnx.Module):
         self.input_layernorm = RMSNorm(cfg.hidden_size, cfg.rms_norm_eps, "norm", **kw)
         self.post_attention_layernorm = RMSNorm(cfg.hidden_size, cfg.rms_norm_eps, "norm", **kw)
 
-    def __call__(self, x, cos, sin, mask, cache=None, write_index=None):
-        h, cache = self.self_attn(self.input_layernorm(x), cos, sin, mask, cache, write_index)
+    def __call__(self, x, cos, sin, mask, cache=None, write_index=None, from_cache=True):
+        h, cache = self.self_attn(self.input_layernorm(x), cos, sin, mask, cache, write_index, from_cache)
         x = x + h
         return x + self.mlp(self.post_attention_layernorm(x)), cache
 

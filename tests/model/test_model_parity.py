@@ -205,6 +205,19 @@ def test_rope_index_matches_transformers(pair):
         np.testing.assert_array_equal(np.asarray(delta), ref_delta.numpy()[:, 0])
 
 
+def test_given_position_ids_equal_computed_ones(pair):
+    """The training pipeline may precompute the multimodal ids ([3, B, L]) outside the step."""
+    hf, model, cfg = pair
+    ids, mask, pixels, grid = make_batch(cfg, [[1, (4, 4), 2, (2, 4), 1], [2, (6, 2), 6]], pad="right")
+    pos, _ = get_rope_index(jnp.asarray(ids), jnp.asarray(grid), cfg.image_token_id,
+                            cfg.vision.spatial_merge_size, jnp.asarray(mask))
+    ours = nnx.jit(lambda m, *a: m(a[0], attention_mask=a[1], pixel_values=a[2], image_grid_thw=a[3], position_ids=a[4]))(
+        model, jnp.asarray(ids, jnp.int32), jnp.asarray(mask), jnp.asarray(pixels), jnp.asarray(grid, jnp.int32), pos)
+    err = rel_err(ours, hf_logits(hf, ids, mask, pixels, grid), where=mask.astype(bool))
+    print(f"rel err {err:.2e}")
+    assert err < TOL, err
+
+
 def test_loss_and_gradients_match_torch(pair):
     hf, model, cfg = pair
     ids, mask, pixels, grid = make_batch(cfg, [[1, (4, 4), 2, (2, 4), 1], [2, (6, 2), 6]], pad="left")
