@@ -46,8 +46,9 @@ class TextAttention(nnx.Module):
             cache = (k_all, v_all)
             if from_cache:
                 k, v = k_all.astype(q.dtype), v_all.astype(q.dtype)
-        out = jax.nn.dot_product_attention(q, k, v, mask=mask, is_causal=mask is None,
-                                           implementation=self.attention_impl)
+        # a one-token decode query is memory-bound: fused kernels gain nothing there, use XLA's
+        impl = self.attention_impl if q.shape[1] > 1 else None
+        out = jax.nn.dot_product_attention(q, k, v, mask=mask, is_causal=mask is None, implementation=impl)
         out = self.o_proj(out)
         return constrain(out, ("batch", "length", "act_embed")), cache
 
