@@ -127,20 +127,21 @@ def door(w: ProgramWriter, rng: np.random.Generator) -> None:
         side = "left" if rng.random() < 0.5 else "right"
         leaves = [(-width / 2 + g, width / 2 - g, side)]
     swing = u(rng, 1.4, 1.9)
+    y_face = -frame_d / 2  # leaves flush with the frame's front: they swing out past 90 degrees freely
     hz = u(rng, 0.95, 1.05)
     for x0, x1, side in leaves:
-        leaf = w.box((x1 - x0, t, height - g), ((x0 + x1) / 2, 0.0, (height - g) / 2))
+        leaf = w.box((x1 - x0, t, height - g), ((x0 + x1) / 2, y_face + t / 2, (height - g) / 2))
         hinge_x = x0 if side == "left" else x1
         axis = (0.0, 0.0, -1.0) if side == "left" else (0.0, 0.0, 1.0)
         leaf_id = w.part("leaf", leaf, leaf_mat, parent=frame, twin="leaf",
-                         joint=JointSpec("hinge", axis, (hinge_x, -t / 2, height / 2), (0.0, swing)))
+                         joint=JointSpec("hinge", axis, (hinge_x, y_face, height / 2), (0.0, swing)))
         free = 1.0 if side == "left" else -1.0  # direction from the hinge to the free edge
         hx = (x1 - 0.07) if side == "left" else (x0 + 0.07)
-        hub = w.cylinder(0.025, 0.015, (hx, -t / 2 - 0.0075, hz), axis="y", segments=16)
-        grip = w.box((0.12, 0.018, 0.018), (hx - free * 0.06, -t / 2 - 0.045, hz))
-        stem = w.cylinder(0.008, 0.04, (hx, -t / 2 - 0.02, hz), axis="y", segments=12)
+        hub = w.cylinder(0.025, 0.015, (hx, y_face - 0.0075, hz), axis="y", segments=16)
+        grip = w.box((0.12, 0.018, 0.018), (hx - free * 0.06, y_face - 0.045, hz))
+        stem = w.cylinder(0.008, 0.04, (hx, y_face - 0.02, hz), axis="y", segments=12)
         w.part("lever_handle", w.combine(hub, stem, grip), handle_mat, parent=leaf_id,
-               joint=JointSpec("hinge", (0.0, -free, 0.0), (hx, -t / 2 - 0.0075, hz), (0.0, 0.7)))
+               joint=JointSpec("hinge", (0.0, -free, 0.0), (hx, y_face - 0.0075, hz), (0.0, 0.7)))
 
 
 def _sash(w, x0, x1, z0, z1, y, t, bar):
