@@ -222,12 +222,26 @@ def kernel_input_dims(model: Qwen3VL) -> dict[str, int]:
             if isinstance(mod, Dense)}
 
 
+def _to_host(x: jax.Array) -> np.ndarray:
+    if x.is_fully_addressable:
+        return np.asarray(jax.device_get(x))
+    from jax.experimental import multihost_utils
+
+    return np.asarray(multihost_utils.process_allgather(x, tiled=True))
+
+
 def save_pretrained(model: Qwen3VL, config: Qwen3VLConfig, path: str | Path, dtype=None,
                     max_shard_bytes: int = 5 * 2**30) -> None:
     """Writes config.json and safetensors (sharded with an index above ``max_shard_bytes``)
-    that transformers' ``Qwen3VLForConditionalGeneration.from_pretrained`` loads."""
+    that transformers' ``Qwen3VLForConditionalGeneration.from_pretrained`` loads.
+
+    One tensor at a time is gathered to the host. With several processes every process must
+    call this (the gathers are collective); only process 0 writes.
+    """
     path = Path(path)
-    path.mkdir(parents=True, exist_ok=True)
+    writer = jax.process_index() == 0
+    if writer:
+        path.mkdir(parents=True, exist_ok=True)
     n_in = kernel_input_dims(model)
     written: list[tuple[Path, list[str]]] = []  # shard files, written as soon as they fill
     shard: dict[str, np.ndarray] = {}
@@ -236,13 +250,14 @@ def save_pretrained(model: Qwen3VL, config: Qwen3VLConfig, path: str | Path, dty
 
     def flush():
         f = path / f"model-part{len(written):05d}.tmp"
-        write_safetensors(f, shard)
+        if writer:
+            write_safetensors(f, shard)
         written.append((f, list(shard)))
 
     for p, v in nnx.to_flat_state(nnx.state(model, nnx.Param)):
         ours = _path_str(p)
         hf_name, kind = ours_to_hf_name(ours)
-        arr = np.asarray(jax.device_get(v.get_value()))
+        arr = _to_host(v.get_value())
         if dtype is not None:
             arr = arr.astype(dtype)
         out_dtype = arr.dtype
@@ -253,6 +268,8 @@ def save_pretrained(model: Qwen3VL, config: Qwen3VLConfig, path: str | Path, dty
         shard[hf_name] = arr
         total += arr.nbytes
     flush()
+    if not writer:
+        return
     if len(written) == 1:
         written[0][0].replace(path / "model.safetensors")
     else:
