@@ -47,6 +47,7 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from flax import nnx
 
 from jax3dc.model.config import Qwen3VLConfig
@@ -74,6 +75,19 @@ def place_image_tokens(x: jax.Array, image_mask: jax.Array, features: jax.Array,
     if add:
         return x + jnp.where(image_mask[..., None], placed, 0)
     return jnp.where(image_mask[..., None], placed, x)
+
+
+def _check_image_tokens(input_ids, image_grid_thw, cfg: Qwen3VLConfig) -> None:
+    """Placeholders must match the images' merged patches (checked when the inputs are concrete;
+    under jit a mismatch cannot be detected and features would be misplaced)."""
+    try:
+        ids, grid = np.asarray(input_ids), np.asarray(image_grid_thw).reshape(-1, 3)
+    except jax.errors.TracerArrayConversionError:
+        return
+    want = int(grid.prod(-1).sum()) // cfg.vision.spatial_merge_size**2
+    have = int((ids == cfg.image_token_id).sum())
+    if have != want:
+        raise ValueError(f"{have} image tokens in input_ids but the image grids give {want} merged patches")
 
 
 def _attention_mask(key_valid: jax.Array, q_pos: jax.Array, k_pos: jax.Array) -> jax.Array:
@@ -119,6 +133,7 @@ class Qwen3VL(nnx.Module):
         if pixel_values is not None:
             if image_grid_thw is None:
                 raise ValueError("pixel_values given without image_grid_thw")
+            _check_image_tokens(input_ids, image_grid_thw, cfg)
             tokens, deepstack = self.visual(pixel_values, image_grid_thw, vision_window)
             x = place_image_tokens(x, image_mask, tokens, add=False)
         deltas = None

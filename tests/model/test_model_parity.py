@@ -148,6 +148,8 @@ def test_windowed_vision_attention_matches(pair):
               *(rel_err(a[:n], b.numpy()) for a, b in zip(deepstack, out.deepstack_features)))
     print(f"windowed vision rel err {err:.2e}")
     assert err < TOL, err
+    with pytest.raises(ValueError, match="image tokens"):
+        model(jnp.full((1, 5), cfg.image_token_id), pixel_values=jnp.asarray(padded), image_grid_thw=grid)
     with pytest.raises(ValueError, match="window"):
         model.visual(jnp.asarray(padded), grid, window=16)  # a 24-patch image does not fit
 
