@@ -6,7 +6,6 @@ side; only what changes the computation is kept (dropout, initializer range and 
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -103,9 +102,6 @@ class Qwen3VLConfig:
             raise ValueError("vision.out_hidden_size must equal text.hidden_size")
         if len(self.vision.deepstack_visual_indexes) > self.text.num_hidden_layers:
             raise ValueError("more DeepStack features than decoder layers")
-
-    def replace(self, **changes: Any) -> Qwen3VLConfig:
-        return dataclasses.replace(self, **changes)
 
     # ------------------------------------------------------------------ presets
     @classmethod
