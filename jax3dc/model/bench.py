@@ -1,11 +1,8 @@
-"""Model-level GPU benchmark, comparable with /work/shared/bench/hf_peer.py: random weights,
-bf16 compute, one image of ``--image`` pixels per row.
-
-* train: forward + backward of the mean token NLL w.r.t. the decoder (vision tower frozen:
-  it runs forward only, as in fine-tuning), no optimiser update; tokens/s and TFLOP/s by
-  hf_peer's FLOP formula.
-* decode: prefill a ``--prompt``-token prompt, then ``--new`` greedy decode steps (one jitted
-  step per token, so the figure is an upper bound on per-token latency); tokens/s per batch size.
+"""Model-level GPU benchmark of the fine-tuning compute, comparable with hf_peer.py's training
+step: random bf16 weights, one image of ``--image`` pixels per row, forward + backward of the
+mean token NLL w.r.t. the decoder (the vision tower is frozen: forward only), no optimiser
+update. Prints tokens/s and TFLOP/s by hf_peer's FLOP formula, e.g. to choose the attention
+kernel and remat. (Decoding is measured by bench/decode.py.)
 
     python3 -m jax3dc.model.bench --preset qwen3_vl_4b --batch 4 --length 2048 --impl cudnn --remat
 """
@@ -80,32 +77,6 @@ def bench_train(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, length: int, imag
             "train_tflops": round(flops / dt / 1e12, 1)}
 
 
-def bench_decode(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, prompt: int, new: int, image: int) -> dict:
-    ids, pixels, grid, patches, _ = image_batch(cfg, rows, prompt, image)
-    prefill = nnx.jit(lambda m, i, p, g: m.prefill(i, None, p, g, max_length=prompt + new, vision_window=patches))
-    step = nnx.jit(lambda m, t, c, d: m.decode_step(t, c, d), donate_argnums=2)
-    t0 = time.perf_counter()
-    logits, cache, deltas = prefill(model, ids, pixels, grid)
-    jax.block_until_ready(logits)
-    prefill_first_s = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    logits, cache, deltas = prefill(model, ids, pixels, grid)
-    jax.block_until_ready(logits)
-    prefill_s = time.perf_counter() - t0
-    tok = jnp.argmax(logits, -1).astype(jnp.int32)
-    logits, cache = step(model, tok, cache, deltas)  # compile
-    jax.block_until_ready(logits)
-    t0 = time.perf_counter()
-    for _ in range(new - 1):
-        tok = jnp.argmax(logits, -1).astype(jnp.int32)
-        logits, cache = step(model, tok, cache, deltas)
-    jax.block_until_ready(logits)
-    dt = time.perf_counter() - t0
-    return {f"decode_b{rows}_prefill_compile_s": round(prefill_first_s - prefill_s, 1),
-            f"decode_b{rows}_prefill_s": round(prefill_s, 3),
-            f"decode_b{rows}_tokens_per_s": round(rows * (new - 1) / dt, 1)}
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--preset", default="qwen3_vl_4b", help="Qwen3VLConfig preset name")
@@ -114,9 +85,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--image", type=int, default=448, help="image side in pixels (one image per row)")
     ap.add_argument("--impl", default="xla", choices=["xla", "cudnn"], help="attention implementation")
     ap.add_argument("--remat", action="store_true", help="recompute each decoder layer in the backward pass")
-    ap.add_argument("--decode-batches", default="1,32", help="comma-separated batch sizes for decoding ('' = skip)")
-    ap.add_argument("--prompt", type=int, default=600, help="prompt tokens for decoding")
-    ap.add_argument("--new", type=int, default=512, help="new tokens per decoding run")
     ap.add_argument("--repeat", type=int, default=5, help="timed training steps")
     ap.add_argument("--out", help="write the figures as JSON here too")
     args = ap.parse_args(argv)
@@ -126,11 +94,6 @@ def main(argv: list[str] | None = None) -> int:
                                     attention_impl=args.impl, remat=args.remat))()
     res.update(bench_train(model, cfg, args.batch, args.length, args.image, args.repeat))
     print(json.dumps(res), flush=True)
-    decode_model = nnx.jit(lambda: Qwen3VL(cfg, rngs=nnx.Rngs(0), dtype=jnp.bfloat16, param_dtype=jnp.bfloat16))()
-    del model
-    for b in [int(x) for x in args.decode_batches.split(",") if x]:
-        res.update(bench_decode(decode_model, cfg, b, args.prompt, args.new, args.image))
-        print(json.dumps(res), flush=True)
     if args.out:
         with open(args.out, "w") as f:
             json.dump(res, f, indent=1)
