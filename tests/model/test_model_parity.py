@@ -220,6 +220,7 @@ def test_given_position_ids_equal_computed_ones(pair):
     assert err < TOL, err
 
 
+@pytest.mark.slow
 def test_loss_and_gradients_match_torch(pair):
     hf, model, cfg = pair
     ids, mask, pixels, grid = make_batch(cfg, [[1, (4, 4), 2, (2, 4), 1], [2, (6, 2), 6]], pad="left")
