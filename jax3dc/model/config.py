@@ -175,6 +175,8 @@ class Qwen3VLConfig:
         rope_type = t_rope.get("rope_type", t_rope.get("type", "default"))
         if rope_type != "default":
             raise InputFileError("config.json", f"text rope_type {rope_type!r} is not supported (only 'default')")
+        if t_rope.get("mrope_interleaved", True) is False:
+            raise InputFileError("config.json", "mrope_interleaved false (Qwen2-VL style) is not supported")
         if t.get("hidden_act", "silu") != "silu":
             raise InputFileError("config.json", f"text hidden_act {t['hidden_act']!r} is not supported")
         tie = d.get("tie_word_embeddings", t.get("tie_word_embeddings", False))

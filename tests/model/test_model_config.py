@@ -57,6 +57,9 @@ def test_bad_configs_raise_typed_errors():
     with pytest.raises(InputFileError, match="rope_type"):
         bad = {**d, "text_config": {**d["text_config"], "rope_parameters": {"rope_type": "yarn", "rope_theta": 1.0}}}
         Qwen3VLConfig.from_hf_dict(bad)
+    with pytest.raises(InputFileError, match="mrope_interleaved"):
+        rope = {**d["text_config"]["rope_parameters"], "mrope_interleaved": False}
+        Qwen3VLConfig.from_hf_dict({**d, "text_config": {**d["text_config"], "rope_parameters": rope}})
     with pytest.raises(InputFileError, match="vision_config"):
         Qwen3VLConfig.from_hf_dict({k: v for k, v in d.items() if k != "vision_config"})
     with pytest.raises(ValueError, match="perfect square"):
