@@ -34,6 +34,7 @@ from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
 from jax3dc.model.generate import GenerationConfig, decode, prefill, prefill_in_chunks  # noqa: E402
 from jax3dc.model.params import param_count  # noqa: E402
 from jax3dc.model.qwen3_vl import Qwen3VL  # noqa: E402
+from bench.random_weights import build_random  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -57,8 +58,8 @@ PRESETS = {
 
 
 def build_model(config: Qwen3VLConfig, dtype) -> Qwen3VL:
-    """Random weights created inside one jitted program, directly in ``dtype`` on the device."""
-    return nnx.jit(lambda: Qwen3VL(config, rngs=nnx.Rngs(0), dtype=dtype, param_dtype=dtype))()
+    """Random weights directly in ``dtype`` on the device, one small fill program per shape."""
+    return build_random(lambda: Qwen3VL(config, rngs=nnx.Rngs(0), dtype=dtype, param_dtype=dtype))
 
 
 def build_prompts(preset: Preset, batch: int, seed: int = 0):
