@@ -2,7 +2,7 @@
 
 A factory calls the writer's methods (one per predefined function of the part-program
 language) with coordinates in metres, names parts with their parent, material and joint, and
-marks copies of one design with a shared `twin` key. `finish` runs the metric program once to
+marks copies of one design with a shared `twin` key. `finish` evaluates the metric statements once to
 find the bounding box, then re-emits every number in the normalised frame (bbox centre at the
 origin, largest extent 1) — points are shifted and scaled, lengths only scaled, angles and counts
 kept — so the program text is the single source of the geometry, and the structure's pivots and
@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from jax3dc.program import ProgramResult, run_program
+from jax3dc.program import FUNCTIONS, ProgramResult, run_program
+from jax3dc.program.library import PartCall
 from jax3dc.relations import extract_relations
 from jax3dc.structure.schema import Joint, Material, Node, Relation, Structure
 
@@ -77,6 +78,13 @@ class Normalised:
     structure: Structure  # relations extracted from the part meshes (jax3dc.relations, SPEC §4)
     scale_m_per_nu: float
     intended_relations: tuple[Relation, ...]  # what the factory built as copies (twin keys), for checks
+
+
+def _as_tuples(value: Any) -> Any:
+    """Writer arguments as the interpreter passes them: lists and tuples become tuples."""
+    if isinstance(value, (list, tuple)):
+        return tuple(_as_tuples(v) for v in value)
+    return value
 
 
 def fmt(x: float) -> str:
@@ -242,11 +250,31 @@ class ProgramWriter:
             lines.append(f"{renames.get(st.target, st.target)} = {call}" if st.target else call)
         return "\n".join(lines) + "\n"
 
+    def metric_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounding box (metres) of all parts, by calling the language's functions on the
+        recorded statements directly: the same geometry as running the metric text, without
+        printing and parsing it."""
+        env: dict[str, Any] = {}
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for st in self.statements:
+            args, kwargs = [], {}
+            for a in st.args:
+                value = env[a.value.name] if isinstance(a.value, Ref) else _as_tuples(a.value)
+                if a.keyword:
+                    kwargs[a.keyword] = value
+                else:
+                    args.append(value)
+            out = FUNCTIONS[st.function](*args, **kwargs)
+            if st.target:
+                env[st.target] = out
+            if isinstance(out, PartCall):
+                lo = np.minimum(lo, out.solid.vertices.min(axis=0))
+                hi = np.maximum(hi, out.solid.vertices.max(axis=0))
+        return lo, hi
+
     def finish(self) -> Normalised:
         """Normalise, run the final program and build the structure (SPEC §2 frame)."""
-        metric = run_program(self.program_text())
-        lo = np.min([m.bounds[0] for m in metric.parts.values()], axis=0)
-        hi = np.max([m.bounds[1] for m in metric.parts.values()], axis=0)
+        lo, hi = self.metric_bounds()
         centre = (lo + hi) / 2.0
         scale = 1.0 / float(np.max(hi - lo))
         text = self.program_text(centre, scale)

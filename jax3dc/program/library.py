@@ -266,7 +266,7 @@ def radial_array(mesh, count=4, axis="z", center=(0, 0, 0), angle=360.0) -> Soli
 def mirror(mesh, plane="yz", center=(0, 0, 0)) -> Solid:
     """The mirror image across `plane` ("yz": x -> -x, "xz": y -> -y, "xy": z -> -z) through `center`."""
     planes = {"yz": 0, "xz": 1, "xy": 2}
-    if plane not in planes:
+    if not isinstance(plane, str) or plane not in planes:
         raise ArgumentError(f'plane must be "yz", "xz" or "xy", got {_describe(plane)}')
     flip = np.eye(3)
     flip[planes[plane], planes[plane]] = -1.0
