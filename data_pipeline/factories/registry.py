@@ -9,7 +9,7 @@ from typing import Callable
 import numpy as np
 import trimesh
 
-from data_pipeline.factories import appliances, furniture, household, shelves, storage
+from data_pipeline.factories import appliances, furniture, household, shelves, small_objects, storage
 from data_pipeline.factories.writer import Normalised, ProgramWriter
 from jax3dc.errors import Jax3dcError
 from jax3dc.structure.schema import Structure
@@ -65,6 +65,15 @@ _BUILDS: dict[str, Build] = {
     "sofa": furniture.sofa,
     "bed": furniture.bed,
     "desk": furniture.desk,
+    "kitchen_pot": small_objects.kitchen_pot,
+    "kettle": small_objects.kettle,
+    "bucket": small_objects.bucket,
+    "eyeglasses": small_objects.eyeglasses,
+    "globe": small_objects.globe,
+    "desk_fan": small_objects.desk_fan,
+    "printer": small_objects.printer,
+    "toaster": small_objects.toaster,
+    "stapler": small_objects.stapler,
 }
 _SHELVES: dict[str, Build] = {
     "cell_shelf": shelves.cell_shelf,
