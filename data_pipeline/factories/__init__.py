@@ -1,7 +1,7 @@
 """Procedural object factories (SPEC §4): each writes a part program, a structure and materials.
 
 `generate_object(category, seed)` is the entry point; `FACTORIES` lists the categories
-(27 articulated / furniture categories and the 4 instance-heavy shelves of the paper).
+(36 categories: the 27 of SPEC §4 and more, and the 4 instance-heavy shelves of the paper).
 
 What every object satisfies (tests/factories check it for several seeds):
   * the program text is the single source of geometry: `parts` are the meshes of running it;
