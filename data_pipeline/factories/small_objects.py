@@ -81,7 +81,8 @@ def eyeglasses(w: ProgramWriter, rng: np.random.Generator) -> None:
         lens = w.scale(w.cylinder(lens_r, 0.002, (s * cx, 0.0, 0.0), axis="y", segments=32), (oval, 1.0, 1.0),
                        (s * cx, 0.0, 0.0))
         w.part("lens", lens, lens_mat, parent=frame, twin="lens")
-    length, t = u(rng, 0.12, 0.15), 0.004
+    t = 0.004
+    length = min(u(rng, 0.12, 0.15), round(2 * (end_x - t) - 0.004, 3))  # folded, it clears the other temple
     for s in (-1.0, 1.0):
         inner_x = s * (end_x - t)  # the temple's inner face; it folds inwards about its front inner edge
         temple = w.box((t, length, 0.006), (s * (end_x - t / 2), rim + length / 2, 0.2 * lens_r))
