@@ -11,6 +11,7 @@ import importlib
 
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "data_pipeline.convert_cli",
+    "data_pipeline.build_cli",
 )
 
 

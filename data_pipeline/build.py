@@ -1,0 +1,139 @@
+"""Plan and run a dataset build: objects → shard tasks (split by object) → shards, in parallel.
+
+The plan depends only on the sources and the seed: objects are assigned to train/val/test by
+SHA-256 of their id, kept in source order within a split, and cut into shards of a fixed
+number of objects. Workers (spawned processes, each with its own GL context) build whole
+shards, so the bytes of a shard never depend on the worker count.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Callable
+
+from tqdm import tqdm
+
+from data_pipeline.samples import SourceObject, object_records, split_of
+from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
+from jax3dc.errors import InputFileError
+
+
+@dataclass(frozen=True)
+class SourceSpec:
+    """How to make one object: ``kind`` "factory" (category, seed) or "import" (path)."""
+
+    kind: str
+    object_id: str
+    category: str = ""
+    seed: int = 0
+    path: str = ""
+
+
+@dataclass(frozen=True)
+class ShardTask:
+    name: str
+    split: str
+    sources: tuple[SourceSpec, ...]
+
+
+@dataclass(frozen=True)
+class BuildConfig:
+    views: int
+    seed: int
+    size: int
+    objects_per_shard: int
+
+
+def factory_sources(n: int, seed: int) -> list[SourceSpec]:
+    """``n`` factory objects cycling through the categories; object k of the build has seed
+    ``seed * 1_000_000 + k``, so two builds with different seeds share no object."""
+    from data_pipeline.factories import FACTORIES, object_id
+
+    categories = list(FACTORIES)
+    out = []
+    for k in range(n):
+        category, obj_seed = categories[k % len(categories)], seed * 1_000_000 + k
+        out.append(SourceSpec("factory", object_id(category, obj_seed), category=category, seed=obj_seed))
+    return out
+
+
+def import_sources(paths: list[Path]) -> list[SourceSpec]:
+    return [SourceSpec("import", Path(p).resolve().name, path=str(Path(p).resolve())) for p in paths]
+
+
+def plan_shards(sources: list[SourceSpec], objects_per_shard: int) -> list[ShardTask]:
+    tasks = []
+    for split in ("train", "val", "test"):
+        members = [s for s in sources if split_of(s.object_id) == split]
+        for i in range(0, len(members), objects_per_shard):
+            chunk = tuple(members[i:i + objects_per_shard])
+            tasks.append(ShardTask(f"{split}-{i // objects_per_shard:05d}{SHARD_SUFFIX}", split, chunk))
+    return tasks
+
+
+def load_source(spec: SourceSpec) -> SourceObject:
+    if spec.kind == "factory":
+        from data_pipeline.factories import generate_object
+
+        g = generate_object(spec.category, spec.seed)
+        return SourceObject(g.category, g.object_id, g.structure, g.parts, g.scale_m_per_nu, g.program_text)
+    from data_pipeline.importers.source import import_object
+
+    obj = import_object(Path(spec.path))
+    return SourceObject(str(obj.meta.get("category", "imported")), spec.object_id, obj.structure, obj.parts,
+                        float(obj.meta.get("scale", 1.0)))
+
+
+def build_shard(task: ShardTask, out_dir: str, config: BuildConfig) -> tuple[str, int, str]:
+    """Render every object of ``task`` and write its shard; returns (name, records, sha256)."""
+    def records():
+        for spec in task.sources:
+            yield from object_records(load_source(spec), config.views, config.seed, config.size)
+
+    count, sha = write_shard(Path(out_dir) / task.name, records())
+    return task.name, count, sha
+
+
+def _build_star(args: tuple) -> tuple[str, int, str]:
+    return build_shard(*args)
+
+
+def run_build(out_dir: Path, sources: list[SourceSpec], config: BuildConfig, workers: int,
+              progress: bool = True, on_shard: Callable[[str], None] | None = None) -> dict:
+    """Build (or finish) the dataset in ``out_dir``; returns the final manifest."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    tasks = plan_shards(sources, config.objects_per_shard)
+    wanted = {"config": asdict(config), "sources": [asdict(s) for s in sources]}
+    manifest = load_manifest(out_dir)
+    if manifest is None:
+        manifest = dict(wanted, shards={}, complete=False)
+    elif {k: manifest.get(k) for k in wanted} != wanted:
+        raise InputFileError(out_dir, "holds a build with other settings or sources; use a new --out directory")
+    todo = [t for t in tasks if not finished(out_dir, manifest, t.name)]
+    for t in todo:
+        manifest["shards"].pop(t.name, None)
+    bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), unit="shard", disable=not progress)
+    jobs = [(t, str(out_dir), config) for t in todo]
+    split_of_task = {t.name: t.split for t in tasks}
+
+    def done(result: tuple[str, int, str]) -> None:
+        name, count, sha = result
+        manifest["shards"][name] = {"records": count, "sha256": sha, "split": split_of_task[name]}
+        save_manifest(out_dir, manifest)
+        bar.update(1)
+        if on_shard is not None:
+            on_shard(name)
+
+    if workers <= 1 or len(jobs) <= 1:
+        for job in jobs:
+            done(build_shard(*job))
+    else:
+        with multiprocessing.get_context("spawn").Pool(workers) as pool:
+            for result in pool.imap_unordered(_build_star, jobs):
+                done(result)
+    bar.close()
+    manifest["complete"] = True
+    save_manifest(out_dir, manifest)
+    return manifest

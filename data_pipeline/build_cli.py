@@ -1,0 +1,79 @@
+"""``jax3dc data build`` (factory objects) and ``jax3dc data import`` (URDF / MJCF) → shards."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+BUILD_DESCRIPTION = """\
+Render procedural objects into ArrayRecord shards of training records (SPEC §4).
+
+Each object gives --views records: view 0 at rest, later views with one joint moved. Objects are
+split into train/val/test by a hash of their id, never by view. Files in --out:
+  train-00000.array_record ...   the shards
+  manifest.json                  settings and the finished shards (records, SHA-256)
+If a build is interrupted, run the same command again: finished shards are kept, the rest are
+rebuilt (byte-identical for the same --seed).
+
+example:  jax3dc data build --out data/train --objects 200 --views 3 --workers 2 --seed 0
+"""
+
+IMPORT_DESCRIPTION = """\
+Convert URDF / MJCF objects (e.g. PartNet-Mobility folders with mobility.urdf) and render them
+into ArrayRecord shards, like `jax3dc data build`.
+
+example:  jax3dc data import partnet/door_8877 partnet/microwave_7119 --out data/imported
+"""
+
+
+def _common(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", metavar="DIR", type=Path, required=True, help="output directory")
+    parser.add_argument("--views", type=int, default=3, help="records per object (default 3)")
+    parser.add_argument("--workers", type=int, default=1, help="parallel render processes (default 1)")
+    parser.add_argument("--seed", type=int, default=0, help="build seed (default 0)")
+    parser.add_argument("--size", type=int, default=448, help="image side in pixels (default 448)")
+    parser.add_argument("--objects-per-shard", type=int, default=8, help="objects in one shard (default 8)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    build = subparsers.add_parser("build", help="render procedural objects into ArrayRecord shards",
+                                  description=BUILD_DESCRIPTION,
+                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+    build.add_argument("--objects", type=int, required=True, help="number of factory objects (cycling categories)")
+    _common(build)
+    build.set_defaults(func=run_build_command)
+
+    imp = subparsers.add_parser("import", help="render URDF / MJCF objects into ArrayRecord shards",
+                                description=IMPORT_DESCRIPTION,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    imp.add_argument("paths", nargs="+", metavar="PATH", type=Path, help="URDF / MJCF files or object folders")
+    _common(imp)
+    imp.set_defaults(func=run_import_command)
+
+
+def _run(args: argparse.Namespace, sources: list) -> int:
+    from data_pipeline.build import BuildConfig, run_build
+
+    if args.views < 1 or args.workers < 1 or args.size < 16 or args.objects_per_shard < 1:
+        raise SystemExit("--views, --workers, --objects-per-shard must be >= 1 and --size >= 16")
+    config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard)
+    manifest = run_build(args.out, sources, config, args.workers, progress=not args.quiet)
+    if not args.quiet:
+        total = sum(s["records"] for s in manifest["shards"].values())
+        print(f"{total} records in {len(manifest['shards'])} shards in {args.out}")
+    return 0
+
+
+def run_build_command(args: argparse.Namespace) -> int:
+    from data_pipeline.build import factory_sources
+
+    if args.objects < 1:
+        raise SystemExit("--objects must be >= 1")
+    return _run(args, factory_sources(args.objects, args.seed))
+
+
+def run_import_command(args: argparse.Namespace) -> int:
+    from data_pipeline.build import import_sources
+
+    return _run(args, import_sources(args.paths))
