@@ -20,6 +20,7 @@ from flax import nnx
 
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
+from jax3dc.model.random_weights import build_random
 
 
 def image_batch(cfg: Qwen3VLConfig, rows: int, length: int, image: int, seed: int = 0):
@@ -90,8 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     cfg = getattr(Qwen3VLConfig, args.preset)()
     res: dict = {"preset": args.preset, "impl": args.impl, "remat": args.remat, "device": str(jax.devices()[0])}
-    model = nnx.jit(lambda: Qwen3VL(cfg, rngs=nnx.Rngs(0), dtype=jnp.bfloat16, param_dtype=jnp.bfloat16,
-                                    attention_impl=args.impl, remat=args.remat))()
+    model = build_random(lambda: Qwen3VL(cfg, rngs=nnx.Rngs(0), dtype=jnp.bfloat16, param_dtype=jnp.bfloat16,
+                                         attention_impl=args.impl, remat=args.remat))
     res.update(bench_train(model, cfg, args.batch, args.length, args.image, args.repeat))
     print(json.dumps(res), flush=True)
     if args.out:
