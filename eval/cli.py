@@ -1,7 +1,7 @@
 """The ``jax3dc eval`` command group: score predictions, score the no-training baselines.
 
 Each module in SUBCOMMAND_MODULES has ``register(subparsers)`` adding more ``jax3dc eval ...``
-subcommands (batched generation, ``eval run``, comes with the model).
+subcommands (``eval run``: batched generation over a test split and a report folder).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Any, Iterable
 
 from jax3dc.errors import InputFileError
 
-SUBCOMMAND_MODULES: tuple[str, ...] = ()
+SUBCOMMAND_MODULES: tuple[str, ...] = ("eval.run",)
 
 
 def _write_jsonl(path: Path, items: Iterable[dict[str, Any]]) -> None:

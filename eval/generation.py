@@ -1,0 +1,237 @@
+"""Reading a test split from ArrayRecord shards and generating structures for it in batches.
+
+Records are tokenised once up front (ids only; pixels are made per batch, so a large split does
+not sit in memory as patches), sorted longest first so a batch that does not fit shows up at the
+start, left-padded to a multiple of ``bucket`` (few distinct shapes, few recompiles) and run
+through a jitted prefill + the jitted decode loop of ``jax3dc.model.generate``. The prefill passes
+``vision_window`` = the largest image's patch count so each image attends only to itself (full
+packed attention over a whole batch of images runs out of memory).
+
+Predictions are appended to ``predictions.jsonl`` batch by batch; a rerun skips the keys already
+there, so a killed run resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any, Iterable, Iterator, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import nnx
+from PIL import Image
+from tqdm import tqdm
+
+from data_pipeline.record import CorruptRecordError, Record, decode_record
+from eval.metrics.cases import Reference
+from jax3dc.errors import InputFileError, StructureError
+from jax3dc.model.chat import encode_chat
+from jax3dc.model.generate import GenerationConfig, Prefilled, cache_capacity, decode, left_pad
+from jax3dc.model.params import load_pretrained
+from jax3dc.model.processor import ImageProcessorConfig, preprocess_images, smart_resize
+from jax3dc.model.tokenizer import load_tokenizer
+from jax3dc.prompt import chat_messages
+from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
+
+SHARD_SUFFIX = ".array_record"
+_READ_CHUNK = 256
+
+# A legend line of the SPEC §3 prompt: "id: #rrggbb | cx cy cz | ex ey ez".
+_LEGEND = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \| (\S+) (\S+) (\S+) \| (\S+) (\S+) (\S+)$", re.MULTILINE)
+
+
+def shard_paths(sources: Sequence[str | Path], split: str | None) -> list[Path]:
+    """ArrayRecord files named by ``sources`` (files, or folders searched recursively).
+
+    In a folder, files whose name starts with ``split`` are taken when there are any (shards are
+    named per split), else every ``*.array_record*`` file (records are then filtered by meta.split).
+    """
+    paths: list[Path] = []
+    for source in sources:
+        source = Path(source)
+        if source.is_file():
+            paths.append(source)
+        elif source.is_dir():
+            found = sorted(p for p in source.rglob(f"*{SHARD_SUFFIX}*") if p.is_file())
+            named = [p for p in found if split and p.name.startswith(split)]
+            paths.extend(named or found)
+        else:
+            raise InputFileError(source, "no such shard file or folder")
+    if not paths:
+        raise InputFileError(", ".join(map(str, sources)), f"no {SHARD_SUFFIX} files found")
+    return paths
+
+
+def read_records(paths: Iterable[Path], split: str | None = None) -> Iterator[Record]:
+    """Every record of the shards in order; with ``split``, only records whose meta.split matches
+    (records without a split field are kept)."""
+    from array_record.python.array_record_module import ArrayRecordReader
+
+    for path in paths:
+        try:
+            reader = ArrayRecordReader(str(path))
+        except Exception as e:  # the C++ reader raises plain RuntimeError / ValueError
+            raise InputFileError(path, f"not a readable ArrayRecord file: {e}") from None
+        try:
+            n = reader.num_records()
+            for start in range(0, n, _READ_CHUNK):
+                for index, blob in enumerate(reader.read(start, min(n, start + _READ_CHUNK)), start):
+                    try:
+                        record = decode_record(blob)
+                    except CorruptRecordError as e:
+                        raise InputFileError(path, f"record {index}: {e}") from None
+                    if split is None or record.meta.get("split", split) == split:
+                        yield record
+        finally:
+            reader.close()
+
+
+def record_boxes(record: Record) -> dict[int, Box]:
+    """Per-part boxes from meta["boxes"], else from the prompt's legend (the same numbers)."""
+    if "boxes" in record.meta:
+        return boxes_from_dict(record.meta["boxes"])
+    boxes = {
+        int(m[1]): Box(tuple(float(v) for v in m.groups()[1:4]), tuple(float(v) for v in m.groups()[4:7]))
+        for m in _LEGEND.finditer(record.prompt)
+    }
+    if not boxes:
+        raise StructureError("box_value", record.key, "record has no meta.boxes and no part legend in its prompt")
+    return boxes
+
+
+def reference_of(record: Record) -> Reference:
+    """The record's target as a canonical scoring reference (an invalid target is an input error)."""
+    try:
+        boxes = record_boxes(record)
+        structure = parse_structure(record.target)
+    except StructureError as e:
+        raise InputFileError(record.key, f"invalid reference target or boxes: {e}") from None
+    missing = sorted(set(structure.nodes) - set(boxes))
+    if missing:
+        raise InputFileError(record.key, f"no box for parts {missing}")
+    return Reference(record.key, canonicalize(structure, boxes), boxes)
+
+
+def read_predictions_file(path: Path) -> dict[str, dict[str, Any]]:
+    """Lines already written by an earlier (possibly killed) run, by key.
+
+    A torn last line (the run died mid-write) is dropped and the file rewritten without it.
+    """
+    if not path.exists():
+        return {}
+    done: dict[str, dict[str, Any]] = {}
+    lines = path.read_text(encoding="utf-8").splitlines()
+    torn = False
+    for line in lines:
+        try:
+            item = json.loads(line)
+        except json.JSONDecodeError:
+            torn = True
+            continue
+        if isinstance(item, dict) and isinstance(item.get("key"), str) and isinstance(item.get("text"), str):
+            done[item["key"]] = item
+    if torn:
+        path.write_text("".join(json.dumps(v, separators=(",", ":")) + "\n" for v in done.values()), encoding="utf-8")
+    return done
+
+
+@dataclass(frozen=True)
+class Prompt:
+    """One record's prompt ids and what is needed to make its pixels later."""
+
+    key: str
+    input_ids: np.ndarray
+    record: Record
+
+
+@dataclass(frozen=True)
+class Generator:
+    """A loaded checkpoint: model, its config, tokenizer and image processor settings."""
+
+    model: Any
+    config: Any
+    tokenizer: Any
+    processor: Any
+
+    @classmethod
+    def load(cls, checkpoint: str | Path, dtype: str = "bfloat16") -> "Generator":
+        checkpoint = Path(checkpoint)
+        if not (checkpoint / "config.json").is_file():
+            raise InputFileError(checkpoint, "not a checkpoint folder (no config.json)")
+        model, config = load_pretrained(checkpoint, dtype=getattr(jnp, dtype))
+        return cls(model, config, load_tokenizer(checkpoint), ImageProcessorConfig.from_pretrained(checkpoint))
+
+    def images(self, record: Record) -> list:
+        try:
+            return [Image.open(io.BytesIO(blob)) for blob in (record.image_png, record.seg_png)]
+        except OSError as e:
+            raise InputFileError(record.key, f"record image is not a readable PNG: {e}") from None
+
+    def grids(self, record: Record) -> np.ndarray:
+        """(t, h, w) patch grid of I and S from the PNG sizes alone (no pixel decoding)."""
+        p = self.processor
+        rows = []
+        for image in self.images(record):
+            height, width = smart_resize(image.height, image.width, p.factor, p.min_pixels, p.max_pixels)
+            rows.append((1, height // p.patch_size, width // p.patch_size))
+        return np.asarray(rows, dtype=np.int64)
+
+    def prompt(self, record: Record) -> Prompt:
+        chat = encode_chat(self.tokenizer, chat_messages(record.prompt), self.grids(record),
+                           self.config.vision.spatial_merge_size, add_generation_prompt=True)
+        return Prompt(record.key, chat.input_ids, record)
+
+    def generate_batch(self, prompts: Sequence[Prompt], batch_size: int, max_new_tokens: int,
+                       bucket: int) -> list[tuple[str, int]]:
+        """(text, tokens generated) per prompt; the batch is topped up to ``batch_size`` rows with
+        copies of its last prompt so every full-size batch has the same shape."""
+        rows = list(prompts) + [prompts[-1]] * (batch_size - len(prompts))
+        special = self.tokenizer.special
+        ids, mask = left_pad([p.input_ids for p in rows], special.endoftext, multiple=bucket)
+        processed = [preprocess_images(self.images(p.record), self.processor) for p in rows]
+        pixels = np.concatenate([x.pixel_values for x in processed])
+        grid = np.concatenate([x.image_grid_thw for x in processed])
+        window = int(np.prod(grid, axis=1).max())
+        prefilled = _jit_prefill(self.model, ids, mask, pixels, grid, cache_capacity(ids.shape[1], max_new_tokens), window)
+        config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext)
+        out = decode(self.model, prefilled, config)
+        tokens, lengths = np.asarray(out.tokens), np.asarray(out.lengths)
+        return [(self.tokenizer.decode(tokens[i, :lengths[i]].tolist()), int(lengths[i])) for i in range(len(prompts))]
+
+
+@partial(jax.jit, static_argnames=("graphdef", "capacity", "window"))
+def _prefill(graphdef, state, ids, mask, pixels, grid, capacity: int, window: int) -> Prefilled:
+    model = nnx.merge(graphdef, state)
+    logits, cache, deltas = model.prefill(ids, mask, pixels, grid, max_length=capacity, vision_window=window)
+    return Prefilled(logits, cache, deltas)
+
+
+def _jit_prefill(model, ids, mask, pixels, grid, capacity: int, window: int) -> Prefilled:
+    graphdef, state = nnx.split(model)
+    return _prefill(graphdef, state, jnp.asarray(ids), jnp.asarray(mask), jnp.asarray(pixels),
+                    jnp.asarray(grid, jnp.int32), capacity, window)
+
+
+def generate_predictions(generator: Generator, records: Sequence[Record], out_path: Path, batch_size: int,
+                         max_new_tokens: int, bucket: int = 64) -> dict[str, str]:
+    """Key -> raw text for every record, generating only the keys not yet in ``out_path``."""
+    done = read_predictions_file(out_path)
+    todo = [r for r in records if r.key not in done]
+    if todo:
+        prompts = sorted((generator.prompt(r) for r in todo), key=lambda p: (-len(p.input_ids), p.key))
+        with out_path.open("a", encoding="utf-8") as f, tqdm(total=len(prompts), desc="generating", unit="obj") as bar:
+            for start in range(0, len(prompts), batch_size):
+                batch = prompts[start:start + batch_size]
+                for p, (text, n) in zip(batch, generator.generate_batch(batch, batch_size, max_new_tokens, bucket)):
+                    item = {"key": p.key, "text": text, "new_tokens": n, "hit_limit": n >= max_new_tokens}
+                    f.write(json.dumps(item, separators=(",", ":")) + "\n")
+                    done[p.key] = item
+                f.flush()
+                bar.update(len(batch))
+    return {r.key: done[r.key]["text"] for r in records}

@@ -1,0 +1,207 @@
+"""``jax3dc eval run`` end to end on tiny ArrayRecord shards of factory objects.
+
+The scoring path runs with real structures (``--reference-as-prediction`` must score 100, a
+predictions file with one broken line must show that parse failure); the generation path runs a
+tiny random Qwen3-VL with the real Qwen tokenizer, whose garbage must count as parse failures with
+their rule recorded, while the report still renders and a rerun resumes instead of regenerating.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from data_pipeline.factories import generate_object
+from data_pipeline.record import Record, encode_record
+from jax3dc.cli import main
+from jax3dc.geometry.parts import part_boxes
+from jax3dc.palette import object_palette
+from jax3dc.prompt import build_prompt
+from jax3dc.structure import boxes_to_dict, to_json
+
+CAMERA = {"position": [0.3, -2.5, 1.2], "lookat": [0.0, 0.0, 0.0], "up": [0.0, 0.0, 1.0], "fovy": 40.0,
+          "width": 48, "height": 40}
+TEST_OBJECTS = (("cabinet", 0), ("drawer_chest", 1), ("laptop", 2))
+REPORT_FILES = ("metrics.json", "per_object.jsonl", "tables.md", "per_category.md", "failure_attribution.png",
+                "index.md", "references.jsonl")
+
+
+def png(seed: int, size: tuple[int, int]) -> bytes:
+    pixels = np.random.default_rng(seed).integers(0, 256, (size[1], size[0], 3), dtype=np.uint8)
+    buf = io.BytesIO()
+    Image.fromarray(pixels).save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def factory_record(category: str, seed: int, split: str, legend_only: bool = False) -> Record:
+    obj = generate_object(category, seed)
+    boxes = part_boxes(obj.parts)
+    prompt = build_prompt(boxes, object_palette(category, obj.object_id), len(obj.structure.joints()) or None)
+    meta = {"category": category, "object_id": obj.object_id, "seed": seed, "view": 0, "split": split,
+            "camera": CAMERA}
+    if not legend_only:
+        meta["boxes"] = boxes_to_dict(boxes)
+    return Record(key=f"{category}/{obj.object_id}/0", image_png=png(seed, (48, 40)), seg_png=png(seed + 99, (48, 40)),
+                  prompt=prompt, target=to_json(obj.structure), program=obj.program_text, meta=meta)
+
+
+@pytest.fixture(scope="module")
+def shards(tmp_path_factory) -> Path:
+    from array_record.python.array_record_module import ArrayRecordWriter
+
+    folder = tmp_path_factory.mktemp("shards")
+    groups = {
+        "test-00000-of-00002.array_record": [factory_record(c, s, "test", legend_only=(c == "laptop"))
+                                             for c, s in TEST_OBJECTS[:2]],
+        "test-00001-of-00002.array_record": [factory_record(*TEST_OBJECTS[2], "test", legend_only=True)],
+        "train-00000-of-00001.array_record": [factory_record("wardrobe", 5, "train")],
+    }
+    for name, records in groups.items():
+        writer = ArrayRecordWriter(str(folder / name), "group_size:1")
+        for record in records:
+            writer.write(encode_record(record))
+        writer.close()
+    return folder
+
+
+def keys() -> list[str]:
+    return [f"{c}/{c}_{s:06d}/0" for c, s in TEST_OBJECTS]
+
+
+def read_jsonl(path: Path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def test_reference_as_prediction_scores_100(shards: Path, tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    assert main(["eval", "run", "--data", str(shards), "--reference-as-prediction", "--out", str(out),
+                 "--overlays", "2"]) == 0
+    for name in REPORT_FILES:
+        assert (out / name).stat().st_size > 0, name
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["counts"]["objects"] == 3  # the train shard is not read
+    for key in ("parse", "parent_acc", "edge_f1", "presence_f1", "type_acc", "axis_acc", "range_iou", "success"):
+        assert metrics[key] == pytest.approx(100.0), key
+    assert metrics["pos_err"] == pytest.approx(0.0, abs=1e-9)
+    assert metrics["counts"]["joints_matched"] == metrics["counts"]["joints_ref"] > 0
+    assert sorted(r["key"] for r in read_jsonl(out / "per_object.jsonl")) == sorted(keys())
+    per_category = (out / "per_category.md").read_text()
+    for category, _ in TEST_OBJECTS:
+        assert f"| {category} | 1 | 100.0 |" in per_category
+    assert "| reference | 100.0 | 100.0 |" in (out / "tables.md").read_text()
+    overlays = sorted((out / "overlays").iterdir())
+    assert len(overlays) == 2
+    index = (out / "index.md").read_text()
+    for path in overlays:
+        assert f"(overlays/{path.name})" in index
+    assert Image.open(overlays[0]).size[0] >= 512
+
+
+def test_predictions_file_with_a_broken_line(shards: Path, tmp_path: Path) -> None:
+    refs = {r["key"]: r for r in read_jsonl(_reference_lines(shards, tmp_path))}
+    first, second, third = keys()
+    preds = tmp_path / "preds.jsonl"
+    preds.write_text("\n".join(json.dumps(line) for line in (
+        {"key": first, "structure": refs[first]["structure"]},
+        {"key": second, "text": "```json\n" + json.dumps(refs[second]["structure"]) + "\n```<|im_end|>"},
+        {"key": third, "text": '{"materials": {"0": {"family": "Wood"}}, "nodes": {'},
+    )) + "\n")
+    out = tmp_path / "report"
+    assert main(["eval", "run", "--data", str(shards), "--predictions", str(preds), "--out", str(out)]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["parse"] == pytest.approx(200 / 3)
+    assert metrics["parent_acc"] == pytest.approx(100.0)
+    assert sum(metrics["parse_failures"].values()) == 1
+    rule = next(iter(metrics["parse_failures"]))
+    assert f"parse failure `{rule}`" in (out / "index.md").read_text()
+
+
+def _reference_lines(shards: Path, tmp_path: Path) -> Path:
+    out = tmp_path / "refs"
+    assert main(["eval", "run", "--data", str(shards), "--reference-as-prediction", "--out", str(out),
+                 "--overlays", "0"]) == 0
+    return out / "references.jsonl"
+
+
+def test_bad_inputs_are_one_line_errors(shards: Path, tmp_path: Path, capsys) -> None:
+    assert main(["eval", "run", "--data", str(tmp_path / "nowhere"), "--reference-as-prediction",
+                 "--out", str(tmp_path / "o")]) == 1
+    assert main(["eval", "run", "--data", str(shards), "--out", str(tmp_path / "o")]) == 1  # no source
+    assert main(["eval", "run", "--data", str(shards), "--split", "val", "--reference-as-prediction",
+                 "--out", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err
+    assert "nowhere" in err and "exactly one of" in err and "no records of split 'val'" in err
+
+
+# --------------------------------------------------------------------------- generation
+@pytest.fixture(scope="module")
+def checkpoint(tmp_path_factory) -> Path:
+    """A tiny random Qwen3-VL whose vocabulary covers the real Qwen special ids, saved with the
+    real tokenizer and an image processor sized for it."""
+    import dataclasses
+
+    from flax import nnx
+
+    from jax3dc.model.chat import VL_CHAT_TEMPLATE
+    from jax3dc.model.config import Qwen3VLConfig
+    from jax3dc.model.params import save_pretrained
+    from jax3dc.model.processor import ImageProcessorConfig
+    from jax3dc.model.qwen3_vl import Qwen3VL
+    from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS, load_tokenizer
+
+    tiny = Qwen3VLConfig.tiny(vocab_size=151936, tie_word_embeddings=True)
+    config = dataclasses.replace(
+        tiny, image_token_id=QWEN_VL_SPECIAL_IDS["<|image_pad|>"], video_token_id=151656,
+        vision_start_token_id=QWEN_VL_SPECIAL_IDS["<|vision_start|>"],
+        vision_end_token_id=QWEN_VL_SPECIAL_IDS["<|vision_end|>"])
+    path = tmp_path_factory.mktemp("tiny_checkpoint")
+    save_pretrained(Qwen3VL(config, rngs=nnx.Rngs(0)), config, path)
+    load_tokenizer().save_pretrained(path, chat_template=VL_CHAT_TEMPLATE)
+    ImageProcessorConfig(patch_size=config.vision.patch_size, merge_size=config.vision.spatial_merge_size,
+                         min_pixels=16 * 16, max_pixels=32 * 32).save_pretrained(path)
+    return path
+
+
+@pytest.mark.slow
+def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoint: Path, tmp_path: Path,
+                                                         monkeypatch) -> None:
+    from eval.generation import Generator
+
+    out = tmp_path / "report"
+    argv = ["eval", "run", "--checkpoint", str(checkpoint), "--data", str(shards), "--out", str(out),
+            "--batch-size", "2", "--max-new-tokens", "5", "--bucket", "256", "--dtype", "float32", "--overlays", "3"]
+    batches: list[int] = []
+    real = Generator.generate_batch
+
+    def counted(self, prompts, *args):
+        batches.append(len(prompts))
+        return real(self, prompts, *args)
+
+    monkeypatch.setattr(Generator, "generate_batch", counted)
+    assert main(argv) == 0
+    assert batches == [2, 1]
+    lines = read_jsonl(out / "predictions.jsonl")
+    assert sorted(line["key"] for line in lines) == sorted(keys())
+    assert all(1 <= line["new_tokens"] <= 5 for line in lines)
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["parse"] == 0.0
+    assert sum(metrics["parse_failures"].values()) == 3 and "missing" not in metrics["parse_failures"]
+    rows = read_jsonl(out / "per_object.jsonl")
+    assert all(not row["parsed"] and row["failure_rule"] for row in rows)
+    for name in REPORT_FILES:
+        assert (out / name).stat().st_size > 0, name
+    assert len(list((out / "overlays").iterdir())) == 3
+
+    # Resume: a killed run left two lines and a torn third; only the missing key is generated.
+    text = (out / "predictions.jsonl").read_text().splitlines()
+    (out / "predictions.jsonl").write_text("\n".join(text[:2]) + "\n" + text[2][:7])
+    batches.clear()
+    assert main(argv) == 0
+    assert batches == [1]
+    again = read_jsonl(out / "predictions.jsonl")
+    assert again[:2] == lines[:2] and sorted(line["key"] for line in again) == sorted(keys())
