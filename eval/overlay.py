@@ -2,7 +2,8 @@
 
 Each joint is an arrow along its axis through the pivot; a hinge's range is a sector of a circle
 around the axis (starting from the direction towards the moving part), a slide's range a thick
-segment along the axis from the moving part's centre. Reference joints are green, predicted red.
+segment along the axis from the moving part's centre. Reference joints are green and drawn wider
+underneath the predicted ones (red), so a correct prediction shows as red inside green.
 
 Camera (record meta "camera"), in the structure's normalised frame (nu), either form:
 * look-at: ``{"position": [x,y,z], "lookat": [x,y,z], "up": [x,y,z], "fovy": degrees (vertical),
@@ -105,7 +106,7 @@ def joint_polylines(joint: Joint, child_centroid: np.ndarray) -> list[tuple[np.n
 
 
 def _draw(draw: ImageDraw.ImageDraw, structure: Structure, boxes: Mapping[int, Box], camera: Mapping[str, Any],
-          size: tuple[int, int], colour: tuple[int, int, int]) -> None:
+          size: tuple[int, int], colour: tuple[int, int, int], widen: int) -> None:
     for child, joint in structure.joints().items():
         box = boxes.get(child)
         centroid = np.asarray(box.centroid if box else joint.pivot, dtype=np.float64)
@@ -113,7 +114,7 @@ def _draw(draw: ImageDraw.ImageDraw, structure: Structure, boxes: Mapping[int, B
             uv = project(points, camera, size)
             if np.isnan(uv).any():
                 continue
-            draw.line([tuple(p) for p in uv.tolist()], fill=colour, width=width)
+            draw.line([tuple(p) for p in uv.tolist()], fill=colour, width=width + widen)
 
 
 def draw_overlay(image_png: bytes, camera: Mapping[str, Any], boxes: Mapping[int, Box], reference: Structure,
@@ -123,7 +124,7 @@ def draw_overlay(image_png: bytes, camera: Mapping[str, Any], boxes: Mapping[int
     scale = max(1, math.ceil(MIN_SIDE / max(image.size)))
     image = image.resize((image.width * scale, image.height * scale), Image.Resampling.NEAREST)
     draw = ImageDraw.Draw(image)
-    _draw(draw, reference, boxes, camera, image.size, REFERENCE_RGB)
+    _draw(draw, reference, boxes, camera, image.size, REFERENCE_RGB, widen=3)
     if prediction is not None:
-        _draw(draw, prediction, boxes, camera, image.size, PREDICTED_RGB)
+        _draw(draw, prediction, boxes, camera, image.size, PREDICTED_RGB, widen=0)
     return image
