@@ -1,4 +1,5 @@
-"""``jax3dc data build`` (factory objects) and ``jax3dc data import`` (URDF / MJCF) → shards."""
+"""``jax3dc data build`` (factory objects) and ``jax3dc data import`` (URDF / MJCF) → shards;
+``jax3dc data card`` → statistics and contact sheet."""
 
 from __future__ import annotations
 
@@ -51,6 +52,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     _common(imp)
     imp.set_defaults(func=run_import_command)
 
+    card = subparsers.add_parser("card", help="statistics and a contact sheet of a built dataset",
+                                 description="Write DIR/card.json (records, objects per category, joints, "
+                                 "relations, parts, Qwen3 token counts of prompt and target) and "
+                                 "DIR/contact_sheet.png (sample images I above their segmentations S).")
+    card.add_argument("dir", metavar="DIR", type=Path, help="dataset directory (from `jax3dc data build`)")
+    card.add_argument("--samples", type=int, default=16, help="records on the contact sheet (default 16)")
+    card.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    card.set_defaults(func=run_card_command)
+
 
 def _run(args: argparse.Namespace, sources: list) -> int:
     from data_pipeline.build import BuildConfig, run_build
@@ -77,3 +87,14 @@ def run_import_command(args: argparse.Namespace) -> int:
     from data_pipeline.build import import_sources
 
     return _run(args, import_sources(args.paths))
+
+
+def run_card_command(args: argparse.Namespace) -> int:
+    import json
+
+    from data_pipeline.card import dataset_card
+
+    stats = dataset_card(args.dir, samples=args.samples, progress=not args.quiet)
+    if not args.quiet:
+        print(json.dumps({k: stats[k] for k in ("records", "splits", "joints", "relations", "target_tokens")}))
+    return 0
