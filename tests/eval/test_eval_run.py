@@ -205,3 +205,29 @@ def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoi
     assert batches == [1]
     again = read_jsonl(out / "predictions.jsonl")
     assert again[:2] == lines[:2] and sorted(line["key"] for line in again) == sorted(keys())
+
+
+@pytest.mark.slow
+def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path, checkpoint: Path) -> None:
+    """Batch rows (left padding, vision_window, the topped-up row) decode as each prompt alone
+    through jax3dc.model.generate.generate with full vision attention."""
+    import jax
+
+    from eval.generation import Generator, read_records, shard_paths
+    from jax3dc.model.generate import GenerationConfig, generate
+    from jax3dc.model.processor import preprocess_images
+
+    generator = Generator.load(checkpoint, dtype="float32")
+    records = list(read_records(shard_paths([shards], "test"), "test"))
+    prompts = [generator.prompt(r) for r in records]
+    with jax.default_matmul_precision("highest"):
+        batched = generator.generate_batch(prompts[:2], 3, max_new_tokens=4, bucket=32)
+        special = generator.tokenizer.special
+        config = GenerationConfig(max_new_tokens=4, stop_ids=special.stop_ids, pad_id=special.endoftext)
+        for prompt, (text, n) in zip(prompts[:2], batched):
+            images = preprocess_images(generator.images(prompt.record), generator.processor)
+            alone = generate(generator.model, prompt.input_ids[None], None, images.pixel_values, images.image_grid_thw,
+                             config=config)
+            length = int(alone.lengths[0])
+            assert n == length
+            assert text == generator.tokenizer.decode(np.asarray(alone.tokens)[0, :length].tolist())
