@@ -15,7 +15,8 @@ from typing import Callable
 
 from tqdm import tqdm
 
-from data_pipeline.samples import SourceObject, object_records, split_of
+from data_pipeline.augment import merge_parts, split_part
+from data_pipeline.samples import SourceObject, derived_rng, object_records, split_of
 from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
 from jax3dc.errors import InputFileError
 
@@ -44,6 +45,7 @@ class BuildConfig:
     seed: int
     size: int
     objects_per_shard: int
+    augment: bool = False  # also one split and one merge variant per object (one view each)
 
 
 def factory_sources(n: int, seed: int) -> list[SourceSpec]:
@@ -90,7 +92,13 @@ def build_shard(task: ShardTask, out_dir: str, config: BuildConfig) -> tuple[str
     """Render every object of ``task`` and write its shard; returns (name, records, sha256)."""
     def records():
         for spec in task.sources:
-            yield from object_records(load_source(spec), config.views, config.seed, config.size)
+            obj = load_source(spec)
+            yield from object_records(obj, config.views, config.seed, config.size)
+            if config.augment:
+                rng = derived_rng(config.seed, "augment", obj.object_id)
+                for variant in (split_part(obj, rng), merge_parts(obj, rng)):
+                    if variant is not None:
+                        yield from object_records(variant, 1, config.seed, config.size)
 
     count, sha = write_shard(Path(out_dir) / task.name, records())
     return task.name, count, sha

@@ -34,6 +34,9 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="build seed (default 0)")
     parser.add_argument("--size", type=int, default=448, help="image side in pixels (default 448)")
     parser.add_argument("--objects-per-shard", type=int, default=8, help="objects in one shard (default 8)")
+    parser.add_argument("--augment", action="store_true",
+                        help="also render a split variant (an articulated leaf cut in two) and a merge variant "
+                        "(two compatible sibling leaves joined) of each object, one view each")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
 
@@ -67,7 +70,8 @@ def _run(args: argparse.Namespace, sources: list) -> int:
 
     if args.views < 1 or args.workers < 1 or args.size < 16 or args.objects_per_shard < 1:
         raise SystemExit("--views, --workers, --objects-per-shard must be >= 1 and --size >= 16")
-    config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard)
+    config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard,
+                         augment=args.augment)
     manifest = run_build(args.out, sources, config, args.workers, progress=not args.quiet)
     if not args.quiet:
         total = sum(s["records"] for s in manifest["shards"].values())
