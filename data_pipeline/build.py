@@ -23,7 +23,8 @@ from jax3dc.errors import InputFileError
 
 @dataclass(frozen=True)
 class SourceSpec:
-    """How to make one object: ``kind`` "factory" (category, seed) or "import" (path)."""
+    """How to make one object: ``kind`` "factory" (category, seed), "import" (path) or
+    "scene" (seed = build seed, category = scene index as text)."""
 
     kind: str
     object_id: str
@@ -61,6 +62,10 @@ def factory_sources(n: int, seed: int) -> list[SourceSpec]:
     return out
 
 
+def scene_sources(m: int, seed: int) -> list[SourceSpec]:
+    return [SourceSpec("scene", f"scene_{seed:06d}_{k:06d}", category=str(k), seed=seed) for k in range(m)]
+
+
 def import_sources(paths: list[Path]) -> list[SourceSpec]:
     return [SourceSpec("import", Path(p).resolve().name, path=str(Path(p).resolve())) for p in paths]
 
@@ -88,13 +93,24 @@ def load_source(spec: SourceSpec) -> SourceObject:
                         float(obj.meta.get("scale", 1.0)))
 
 
+def load_sources(spec: SourceSpec) -> list[SourceObject]:
+    """The objects one spec renders: a scene gives its part- and object-level versions."""
+    if spec.kind == "scene":
+        from data_pipeline.scenes import make_scene
+
+        return make_scene(spec.seed, int(spec.category))
+    return [load_source(spec)]
+
+
 def build_shard(task: ShardTask, out_dir: str, config: BuildConfig) -> tuple[str, int, str]:
     """Render every object of ``task`` and write its shard; returns (name, records, sha256)."""
     def records():
         for spec in task.sources:
-            obj = load_source(spec)
-            yield from object_records(obj, config.views, config.seed, config.size)
-            if config.augment:
+            objects = load_sources(spec)
+            for obj in objects:
+                yield from object_records(obj, config.views, config.seed, config.size)
+            if config.augment and spec.kind != "scene":
+                obj = objects[0]
                 rng = derived_rng(config.seed, "augment", obj.object_id)
                 for variant in (split_part(obj, rng), merge_parts(obj, rng)):
                     if variant is not None:

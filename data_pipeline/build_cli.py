@@ -45,6 +45,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                   description=BUILD_DESCRIPTION,
                                   formatter_class=argparse.RawDescriptionHelpFormatter)
     build.add_argument("--objects", type=int, required=True, help="number of factory objects (cycling categories)")
+    build.add_argument("--scenes", type=int, default=0,
+                       help="number of multi-object scenes (furniture with items on top), each written at "
+                       "part and object granularity (default 0)")
     _common(build)
     build.set_defaults(func=run_build_command)
 
@@ -80,11 +83,11 @@ def _run(args: argparse.Namespace, sources: list) -> int:
 
 
 def run_build_command(args: argparse.Namespace) -> int:
-    from data_pipeline.build import factory_sources
+    from data_pipeline.build import factory_sources, scene_sources
 
-    if args.objects < 1:
-        raise SystemExit("--objects must be >= 1")
-    return _run(args, factory_sources(args.objects, args.seed))
+    if args.objects < 0 or args.scenes < 0 or args.objects + args.scenes < 1:
+        raise SystemExit("--objects and --scenes must be >= 0, and not both 0")
+    return _run(args, factory_sources(args.objects, args.seed) + scene_sources(args.scenes, args.seed))
 
 
 def run_import_command(args: argparse.Namespace) -> int:

@@ -66,7 +66,8 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int) -> list[
             boxes = part_boxes(posed.parts)
             structure = canonicalize(with_extracted_relations(posed.structure, posed.parts), boxes)
             visible = set(np.unique(ids).tolist()) - {0}
-            key = f"{obj.category}/{obj.object_id}/{view}" + (f"/{obj.augmentation}" if obj.augmentation else "")
+            tail = [t for t in (obj.augmentation, None if obj.granularity == "part" else obj.granularity) if t]
+            key = "/".join([obj.category, obj.object_id, str(view), *tail])
             meta = {
                 "category": obj.category, "object_id": obj.object_id, "seed": seed, "view": view,
                 "split": split_of(obj.object_id), "granularity": obj.granularity,
