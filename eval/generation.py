@@ -28,7 +28,8 @@ from flax import nnx
 from PIL import Image
 from tqdm import tqdm
 
-from data_pipeline.record import CorruptRecordError, Record, decode_record
+from data_pipeline.record import CorruptRecordError, Record
+from data_pipeline.shards import SHARD_SUFFIX, read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.model.chat import encode_chat
@@ -39,9 +40,6 @@ from jax3dc.model.tokenizer import load_tokenizer
 from jax3dc.prompt import chat_messages
 from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
 
-SHARD_SUFFIX = ".array_record"
-_READ_CHUNK = 256
-
 # A legend line of the SPEC §3 prompt: "id: #rrggbb | cx cy cz | ex ey ez".
 _LEGEND = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \| (\S+) (\S+) (\S+) \| (\S+) (\S+) (\S+)$", re.MULTILINE)
 
@@ -50,7 +48,7 @@ def shard_paths(sources: Sequence[str | Path], split: str | None) -> list[Path]:
     """ArrayRecord files named by ``sources`` (files, or folders searched recursively).
 
     In a folder, files whose name starts with ``split`` are taken when there are any (shards are
-    named per split), else every ``*.array_record*`` file (records are then filtered by meta.split).
+    named per split), else every ``*.array_record`` file (records are then filtered by meta.split).
     """
     paths: list[Path] = []
     for source in sources:
@@ -58,7 +56,7 @@ def shard_paths(sources: Sequence[str | Path], split: str | None) -> list[Path]:
         if source.is_file():
             paths.append(source)
         elif source.is_dir():
-            found = sorted(p for p in source.rglob(f"*{SHARD_SUFFIX}*") if p.is_file())
+            found = sorted(p for p in source.rglob(f"*{SHARD_SUFFIX}") if p.is_file())
             named = [p for p in found if split and p.name.startswith(split)]
             paths.extend(named or found)
         else:
@@ -70,26 +68,17 @@ def shard_paths(sources: Sequence[str | Path], split: str | None) -> list[Path]:
 
 def read_records(paths: Iterable[Path], split: str | None = None) -> Iterator[Record]:
     """Every record of the shards in order; with ``split``, only records whose meta.split matches
-    (records without a split field are kept)."""
-    from array_record.python.array_record_module import ArrayRecordReader
-
+    (records without a split field are kept). A corrupt record raises CorruptRecordError."""
     for path in paths:
         try:
-            reader = ArrayRecordReader(str(path))
-        except Exception as e:  # the C++ reader raises plain RuntimeError / ValueError
+            records = read_shard(path)
+            for record in records:
+                if split is None or record.meta.get("split", split) == split:
+                    yield record
+        except CorruptRecordError as e:
+            raise InputFileError(path, str(e)) from None
+        except (RuntimeError, ValueError) as e:  # the C++ reader's errors for a non-ArrayRecord file
             raise InputFileError(path, f"not a readable ArrayRecord file: {e}") from None
-        try:
-            n = reader.num_records()
-            for start in range(0, n, _READ_CHUNK):
-                for index, blob in enumerate(reader.read(start, min(n, start + _READ_CHUNK)), start):
-                    try:
-                        record = decode_record(blob)
-                    except CorruptRecordError as e:
-                        raise InputFileError(path, f"record {index}: {e}") from None
-                    if split is None or record.meta.get("split", split) == split:
-                        yield record
-        finally:
-            reader.close()
 
 
 def record_boxes(record: Record) -> dict[int, Box]:

@@ -5,12 +5,15 @@ around the axis (starting from the direction towards the moving part), a slide's
 segment along the axis from the moving part's centre. Reference joints are green and drawn wider
 underneath the predicted ones (red), so a correct prediction shows as red inside green.
 
-Camera (record meta "camera"), in the structure's normalised frame (nu), either form:
-* look-at: ``{"position": [x,y,z], "lookat": [x,y,z], "up": [x,y,z], "fovy": degrees (vertical),
-  "width": px, "height": px}`` (pinhole, principal point at the image centre, as MuJoCo's camera);
+Camera (record meta "camera"), in the structure's normalised frame (nu), one of three forms:
+* MuJoCo free camera, what ``jax3dc data build`` writes: ``{"lookat": [x,y,z], "distance": nu,
+  "azimuth": deg, "elevation": deg}`` with an optional ``"fovy"`` (default MuJoCo's 45 degrees);
+* look-at: ``{"position": [x,y,z], "lookat": [x,y,z], "up": [x,y,z], "fovy": degrees (vertical)}``
+  (pinhole, principal point at the image centre);
 * matrices: ``{"intrinsics": 3x3 K, "extrinsics": 4x4 world->camera (OpenCV: x right, y down,
-  z forward), "width": px, "height": px}``.
-If the image has another size than the camera's, pixel coordinates are scaled to it.
+  z forward)}``.
+``"width"`` / ``"height"`` (px) say which image size the camera was made for; absent, the size of
+the image drawn on. An image of another size has its pixel coordinates scaled to it.
 """
 
 from __future__ import annotations
@@ -42,13 +45,32 @@ def _vec(camera: Mapping[str, Any], name: str, size: int) -> np.ndarray:
     return value.reshape(-1)
 
 
-def camera_matrices(camera: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
-    """(K [3,3], world->camera [4,4] in OpenCV axes, (width, height)) from either camera form."""
-    width, height = (int(_vec(camera, k, 1)[0]) for k in ("width", "height"))
+MUJOCO_FOVY = 45.0  # degrees; MuJoCo's default visual/global fovy, used by its free camera
+
+
+def mujoco_free_camera(camera: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(position, lookat, up) of a MuJoCo free camera, as mjv_updateCamera places it."""
+    lookat = _vec(camera, "lookat", 3)
+    distance = float(_vec(camera, "distance", 1)[0])
+    azimuth, elevation = (math.radians(float(_vec(camera, k, 1)[0])) for k in ("azimuth", "elevation"))
+    ca, sa, ce, se = math.cos(azimuth), math.sin(azimuth), math.cos(elevation), math.sin(elevation)
+    forward = np.array([ce * ca, ce * sa, se])
+    return lookat - distance * forward, lookat, np.array([-se * ca, -se * sa, ce])
+
+
+def camera_matrices(camera: Mapping[str, Any], image_size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, tuple[int, int]]:
+    """(K [3,3], world->camera [4,4] in OpenCV axes, (width, height) K is for) from any camera form."""
+    width, height = (int(_vec(camera, k, 1)[0]) if k in camera else default
+                     for k, default in (("width", image_size[0]), ("height", image_size[1])))
     if "intrinsics" in camera:
         k = _vec(camera, "intrinsics", 9).reshape(3, 3)
         return k, _vec(camera, "extrinsics", 16).reshape(4, 4), (width, height)
-    eye, target, up = (_vec(camera, k, 3) for k in ("position", "lookat", "up"))
+    if "distance" in camera:
+        eye, target, up = mujoco_free_camera(camera)
+        fovy = float(_vec(camera, "fovy", 1)[0]) if "fovy" in camera else MUJOCO_FOVY
+    else:
+        eye, target, up = (_vec(camera, k, 3) for k in ("position", "lookat", "up"))
+        fovy = float(_vec(camera, "fovy", 1)[0])
     forward = target - eye
     right = np.cross(forward, up)
     if np.linalg.norm(forward) < 1e-9 or np.linalg.norm(right) < 1e-9:
@@ -60,14 +82,14 @@ def camera_matrices(camera: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, 
     extrinsics = np.eye(4)
     extrinsics[:3, :3] = rotation
     extrinsics[:3, 3] = -rotation @ eye
-    focal = 0.5 * height / math.tan(math.radians(float(_vec(camera, "fovy", 1)[0])) / 2)
+    focal = 0.5 * height / math.tan(math.radians(fovy) / 2)
     k = np.array([[focal, 0.0, width / 2], [0.0, focal, height / 2], [0.0, 0.0, 1.0]])
     return k, extrinsics, (width, height)
 
 
 def project(points: np.ndarray, camera: Mapping[str, Any], image_size: tuple[int, int]) -> np.ndarray:
     """Pixel (x, y) of each 3-D point ``[N, 3]`` in an image of ``image_size``; NaN behind the camera."""
-    k, extrinsics, (width, height) = camera_matrices(camera)
+    k, extrinsics, (width, height) = camera_matrices(camera, image_size)
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     cam = pts @ extrinsics[:3, :3].T + extrinsics[:3, 3]
     uvw = cam @ k.T

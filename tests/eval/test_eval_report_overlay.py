@@ -37,7 +37,7 @@ def test_look_at_camera_geometry() -> None:
 
 
 def test_matrix_camera_matches_look_at_and_image_scaling() -> None:
-    k, extrinsics, _ = camera_matrices(LOOK_AT)
+    k, extrinsics, _ = camera_matrices(LOOK_AT, (200, 100))
     matrices = {"intrinsics": k.tolist(), "extrinsics": extrinsics.tolist(), "width": 200, "height": 100}
     points = np.random.default_rng(0).uniform(-0.5, 0.5, (20, 3))
     np.testing.assert_allclose(project(points, matrices, (200, 100)), project(points, LOOK_AT, (200, 100)))
@@ -47,6 +47,34 @@ def test_matrix_camera_matches_look_at_and_image_scaling() -> None:
     x, y, z = cam[:, 0], -cam[:, 2], cam[:, 1]
     focal = 50 / math.tan(math.radians(30))
     np.testing.assert_allclose(project(points, LOOK_AT, (200, 100)), np.stack([100 + focal * x / z, 50 + focal * y / z], 1))
+
+
+def test_mujoco_free_camera_matches_mujoco_rendering() -> None:
+    """Small spheres rendered by MuJoCo's free camera land where `project` puts their centres."""
+    import data_pipeline.render  # noqa: F401  (chooses the GL backend before mujoco is imported)
+    import mujoco
+
+    centres = np.array([[0.0, 0.0, 0.0], [0.3, -0.1, 0.2], [-0.25, 0.2, -0.15], [0.1, 0.3, 0.3]])
+    spheres = "".join(f'<geom name="s{i}" type="sphere" size="0.012" pos="{x} {y} {z}"/>'
+                      for i, (x, y, z) in enumerate(centres))
+    model = mujoco.MjModel.from_xml_string(
+        f'<mujoco><visual><global offwidth="240" offheight="240"/></visual><worldbody>{spheres}</worldbody></mujoco>')
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    camera = {"lookat": [0.02, 0.01, 0.03], "distance": 2.4, "azimuth": 117.0, "elevation": -23.0}
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+    cam.lookat[:] = camera["lookat"]
+    cam.distance, cam.azimuth, cam.elevation = camera["distance"], camera["azimuth"], camera["elevation"]
+    with mujoco.Renderer(model, 240, 240) as renderer:
+        renderer.enable_segmentation_rendering()
+        renderer.update_scene(data, camera=cam)
+        seg = renderer.render()
+    projected = project(centres, camera, (240, 240))
+    for i, (u, v) in enumerate(projected):
+        rows, cols = np.nonzero((seg[..., 0] == i) & (seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)))
+        assert len(rows) > 3, f"sphere {i} not visible"
+        assert abs(cols.mean() + 0.5 - u) < 0.5 and abs(rows.mean() + 0.5 - v) < 0.5, (i, u, v)
 
 
 def hinged(axis=(0.0, 0.0, 1.0)) -> Structure:

@@ -24,8 +24,7 @@ from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt
 from jax3dc.structure import boxes_to_dict, to_json
 
-CAMERA = {"position": [0.3, -2.5, 1.2], "lookat": [0.0, 0.0, 0.0], "up": [0.0, 0.0, 1.0], "fovy": 40.0,
-          "width": 48, "height": 40}
+CAMERA = {"lookat": [0.0, 0.0, 0.0], "distance": 2.4, "azimuth": 100.0, "elevation": -20.0}  # as data build writes
 TEST_OBJECTS = (("cabinet", 0), ("drawer_chest", 1), ("laptop", 2))
 REPORT_FILES = ("metrics.json", "per_object.jsonl", "tables.md", "per_category.md", "failure_attribution.png",
                 "index.md", "references.jsonl")
@@ -136,6 +135,19 @@ def test_bad_inputs_are_one_line_errors(shards: Path, tmp_path: Path, capsys) ->
                  "--out", str(tmp_path / "o")]) == 1
     err = capsys.readouterr().err
     assert "nowhere" in err and "exactly one of" in err and "no records of split 'val'" in err
+
+
+def test_reference_run_on_a_data_build(tmp_path: Path) -> None:
+    """Shards written by `jax3dc data build` (its meta camera and boxes) score 100 with overlays."""
+    data, out = tmp_path / "data", tmp_path / "report"
+    assert main(["data", "build", "--objects", "4", "--views", "1", "--size", "64", "--out", str(data), "--quiet"]) == 0
+    split = json.loads((data / "manifest.json").read_text())["shards"]
+    split = next(iter(split.values()))["split"]
+    assert main(["eval", "run", "--data", str(data), "--split", split, "--reference-as-prediction",
+                 "--out", str(out), "--overlays", "2"]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["parse"] == 100.0 and metrics["success"] == 100.0
+    assert len(list((out / "overlays").glob("*.png"))) == 2
 
 
 # --------------------------------------------------------------------------- generation
