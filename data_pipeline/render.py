@@ -59,11 +59,11 @@ class Lighting:
     key_strength: float
 
 
-def sample_camera(rng: np.random.Generator, radius: float = 0.87) -> Camera:
+def sample_camera(rng: np.random.Generator, centre: np.ndarray = np.zeros(3), radius: float = 0.87) -> Camera:
     """A camera in the front hemisphere (the object faces -Y, MuJoCo azimuth 90 looks along +Y),
-    slightly above, far enough that a sphere of ``radius`` nu around the origin fits the 45° view."""
+    slightly above, far enough that a sphere of ``radius`` nu around ``centre`` fits the 45° view."""
     distance = radius / np.sin(np.deg2rad(22.5)) * rng.uniform(1.0, 1.15)
-    return Camera(lookat=(0.0, 0.0, 0.0), distance=float(distance),
+    return Camera(lookat=tuple(float(v) for v in centre), distance=float(distance),
                   azimuth=float(rng.uniform(90.0 - 55.0, 90.0 + 55.0)),
                   elevation=float(rng.uniform(-40.0, -8.0)))
 

@@ -61,7 +61,9 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int) -> list[
         records = []
         for view in range(views):
             posed = sample_view_pose(obj.structure, obj.parts, view, rng)
-            camera = sample_camera(rng)
+            lo = np.min([m.bounds[0] for m in posed.parts.values()], axis=0)
+            hi = np.max([m.bounds[1] for m in posed.parts.values()], axis=0)
+            camera = sample_camera(rng, centre=(lo + hi) / 2.0, radius=float(np.linalg.norm(hi - lo)) / 2.0)
             rgb, ids = renderer.render(posed.poses, camera)
             boxes = part_boxes(posed.parts)
             structure = canonicalize(with_extracted_relations(posed.structure, posed.parts), boxes)
