@@ -92,3 +92,15 @@ def test_moved_joint_view_describes_the_pose():
     assert np.abs(after - before).max() > 0.05
     unmoved = [p for p in g.parts if p not in posed.poses]
     assert unmoved and all(np.array_equal(posed.parts[p].vertices, g.parts[p].vertices) for p in unmoved)
+
+
+def test_build_cli_objects_and_scenes(tmp_path):
+    from jax3dc.cli import main
+
+    args = ["data", "build", "--out", str(tmp_path), "--objects", "2", "--scenes", "1", "--views", "2",
+            "--size", "32", "--quiet"]
+    assert main(args) == 0
+    records = list(read_dataset(tmp_path))
+    assert len(records) == 2 * 2 + 2 * 2  # objects x views + scene (part, object) x views
+    assert main(args) == 0  # a finished build run again is a no-op
+    assert [r.key for r in read_dataset(tmp_path)] == [r.key for r in records]
