@@ -16,7 +16,7 @@ import numpy as np
 import trimesh
 
 from data_pipeline.samples import SourceObject, derived_rng
-from jax3dc.structure import Material, Node, Relation, Structure
+from jax3dc.structure import Node, Relation, Structure
 
 FURNITURE = ("table", "desk", "cabinet", "nightstand", "cell_shelf", "simple_bookcase", "drawer_chest")
 ITEMS = ("kettle", "kitchen_pot", "bucket", "toaster", "stapler", "desk_fan", "globe", "laptop", "printer")
@@ -106,22 +106,22 @@ def object_level(structure: Structure, parts: dict[int, trimesh.Trimesh], object
 
 def make_scene(seed: int, index: int) -> list[SourceObject]:
     """Scene ``index`` of a build with ``seed`` at part and object granularity."""
-    from data_pipeline.build import load_source, SourceSpec  # local: build imports this module
+    from data_pipeline.build import SourceSpec, load_source  # local: build imports this module
     from data_pipeline.factories import object_id
 
     rng = derived_rng(seed, "scene", index)
 
-    def factory(category: str, k: int) -> SourceObject:
+    def factory(category: str) -> SourceObject:
         obj_seed = int(rng.integers(1 << 31))
         return load_source(SourceSpec("factory", object_id(category, obj_seed), category=category, seed=obj_seed))
 
     furniture_cats = rng.choice(FURNITURE, size=int(rng.integers(1, 3)), replace=False)
-    item = factory(str(rng.choice(ITEMS)), 0)
+    item = factory(str(rng.choice(ITEMS)))
     copies = int(rng.integers(1, 4))
     placed: list[SourceObject] = []
     x = 0.0
-    for k, cat in enumerate(furniture_cats):
-        obj = factory(str(cat), k)
+    for cat in furniture_cats:
+        obj = factory(str(cat))
         lo, hi = _bounds(_metric(obj, np.zeros(3)).parts)
         placed.append(_metric(obj, np.array([x - lo[0], -(lo[1] + hi[1]) / 2, -lo[2]])))
         x += hi[0] - lo[0] + GAP_M
