@@ -16,6 +16,7 @@ from __future__ import annotations
 import io
 import json
 import re
+import time
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -177,8 +178,8 @@ class Generator:
         return Prompt(record.key, chat.input_ids, record)
 
     def generate_batch(self, prompts: Sequence[Prompt], batch_size: int, max_new_tokens: int,
-                       bucket: int) -> list[tuple[str, int]]:
-        """(text, tokens generated) per prompt; the batch is topped up to ``batch_size`` rows with
+                       bucket: int) -> list[tuple[str, int, bool]]:
+        """(text, tokens generated, ended on a stop token) per prompt; the batch is topped up to ``batch_size`` rows with
         copies of its last prompt so every full-size batch has the same shape."""
         rows = list(prompts) + [prompts[-1]] * (batch_size - len(prompts))
         special = self.tokenizer.special
@@ -191,7 +192,8 @@ class Generator:
         config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext)
         out = decode(self.model, prefilled, config)
         tokens, lengths = np.asarray(out.tokens), np.asarray(out.lengths)
-        return [(self.tokenizer.decode(tokens[i, :lengths[i]].tolist()), int(lengths[i])) for i in range(len(prompts))]
+        return [(self.tokenizer.decode(tokens[i, :lengths[i]].tolist()), int(lengths[i]),
+                 bool(lengths[i]) and int(tokens[i, lengths[i] - 1]) in special.stop_ids) for i in range(len(prompts))]
 
 
 @partial(jax.jit, static_argnames=("graphdef", "capacity", "window"))
@@ -207,20 +209,44 @@ def _jit_prefill(model, ids, mask, pixels, grid, capacity: int, window: int) -> 
                     jnp.asarray(grid, jnp.int32), capacity, window)
 
 
+@dataclass
+class GenerationStats:
+    """What this call generated (keys already in the predictions file are not counted)."""
+
+    objects: int = 0
+    new_tokens: int = 0
+    unstopped: int = 0  # cut at max_new_tokens before a stop token
+    seconds: float = 0.0  # wall time of the batches, compiles included
+
+    def summary(self) -> str:
+        if not self.objects:
+            return "nothing to generate: every key is already in predictions.jsonl"
+        rate = self.new_tokens / self.seconds if self.seconds else float("nan")
+        return (f"generated {self.objects} objects, {self.new_tokens} tokens in {self.seconds:.1f} s "
+                f"({rate:.1f} tokens/s, compiles included); {self.unstopped} hit --max-new-tokens")
+
+
 def generate_predictions(generator: Generator, records: Sequence[Record], out_path: Path, batch_size: int,
-                         max_new_tokens: int, bucket: int = 64) -> dict[str, str]:
+                         max_new_tokens: int, bucket: int = 64) -> tuple[dict[str, str], GenerationStats]:
     """Key -> raw text for every record, generating only the keys not yet in ``out_path``."""
     done = read_predictions_file(out_path)
     todo = [r for r in records if r.key not in done]
+    stats = GenerationStats()
     if todo:
         prompts = sorted((generator.prompt(r) for r in todo), key=lambda p: (-len(p.input_ids), p.key))
+        start_time = time.perf_counter()
         with out_path.open("a", encoding="utf-8") as f, tqdm(total=len(prompts), desc="generating", unit="obj") as bar:
             for start in range(0, len(prompts), batch_size):
                 batch = prompts[start:start + batch_size]
-                for p, (text, n) in zip(batch, generator.generate_batch(batch, batch_size, max_new_tokens, bucket)):
-                    item = {"key": p.key, "text": text, "new_tokens": n, "hit_limit": n >= max_new_tokens}
+                results = generator.generate_batch(batch, batch_size, max_new_tokens, bucket)
+                for p, (text, n, stopped) in zip(batch, results):
+                    item = {"key": p.key, "text": text, "new_tokens": n, "stopped": stopped}
                     f.write(json.dumps(item, separators=(",", ":")) + "\n")
                     done[p.key] = item
+                    stats.objects += 1
+                    stats.new_tokens += n
+                    stats.unstopped += not stopped
                 f.flush()
                 bar.update(len(batch))
-    return {r.key: done[r.key]["text"] for r in records}
+        stats.seconds = time.perf_counter() - start_time
+    return {r.key: done[r.key]["text"] for r in records}, stats

@@ -64,8 +64,9 @@ def run_eval(args: argparse.Namespace) -> int:
         preds, name = {r.key: r.target for r in records}, "reference"
     else:
         generator = Generator.load(args.checkpoint, dtype=args.dtype)
-        preds = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
-                                     args.max_new_tokens, args.bucket)
+        preds, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
+                                            args.max_new_tokens, args.bucket)
+        print(stats.summary())
         name = Path(args.checkpoint).name
     extra = {"references.jsonl": "references.jsonl"}
     if (out / "predictions.jsonl").exists():

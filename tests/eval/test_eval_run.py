@@ -181,7 +181,7 @@ def checkpoint(tmp_path_factory) -> Path:
 
 @pytest.mark.slow
 def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoint: Path, tmp_path: Path,
-                                                         monkeypatch) -> None:
+                                                         monkeypatch, capsys) -> None:
     from eval.generation import Generator
 
     out = tmp_path / "report"
@@ -197,9 +197,10 @@ def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoi
     monkeypatch.setattr(Generator, "generate_batch", counted)
     assert main(argv) == 0
     assert batches == [2, 1]
+    assert "generated 3 objects" in capsys.readouterr().out
     lines = read_jsonl(out / "predictions.jsonl")
     assert sorted(line["key"] for line in lines) == sorted(keys())
-    assert all(1 <= line["new_tokens"] <= 5 for line in lines)
+    assert all(1 <= line["new_tokens"] <= 5 and (line["new_tokens"] == 5 or line["stopped"]) for line in lines)
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["parse"] == 0.0
     assert sum(metrics["parse_failures"].values()) == 3 and "missing" not in metrics["parse_failures"]
@@ -236,7 +237,7 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
         batched = generator.generate_batch(prompts[:2], 3, max_new_tokens=4, bucket=32)
         special = generator.tokenizer.special
         config = GenerationConfig(max_new_tokens=4, stop_ids=special.stop_ids, pad_id=special.endoftext)
-        for prompt, (text, n) in zip(prompts[:2], batched):
+        for prompt, (text, n, _) in zip(prompts[:2], batched):
             images = preprocess_images(generator.images(prompt.record), generator.processor)
             alone = generate(generator.model, prompt.input_ids[None], None, images.pixel_values, images.image_grid_thw,
                              config=config)
