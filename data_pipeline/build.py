@@ -8,6 +8,8 @@ shards, so the bytes of a shard never depend on the worker count.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import multiprocessing
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -129,7 +131,9 @@ def run_build(out_dir: Path, sources: list[SourceSpec], config: BuildConfig, wor
     """Build (or finish) the dataset in ``out_dir``; returns the final manifest."""
     out_dir.mkdir(parents=True, exist_ok=True)
     tasks = plan_shards(sources, config.objects_per_shard)
-    wanted = {"config": asdict(config), "sources": [asdict(s) for s in sources]}
+    source_text = json.dumps([asdict(s) for s in sources], sort_keys=True).encode("utf-8")
+    wanted = {"config": asdict(config), "sources": len(sources),
+              "sources_sha256": hashlib.sha256(source_text).hexdigest()}  # a digest keeps the manifest small
     manifest = load_manifest(out_dir)
     if manifest is None:
         manifest = dict(wanted, shards={}, complete=False)
