@@ -3,8 +3,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export DEBIAN_FRONTEND=noninteractive PIP_DISABLE_PIP_VERSION_CHECK=1
-# Headless OpenGL for MuJoCo's renderer (MUJOCO_GL=egl or osmesa).
-if ! ldconfig -p | grep -q libOSMesa; then
+# Headless OpenGL for MuJoCo's renderer (MUJOCO_GL=egl, Mesa's software EGL on a CPU machine).
+if ! dpkg -s libosmesa6 libegl1 libegl-mesa0 libgl1-mesa-dri >/dev/null 2>&1; then
   apt-get update -qq
   apt-get install -y -qq libosmesa6 libegl1 libegl-mesa0 libgl1-mesa-dri >/dev/null
 fi
