@@ -91,7 +91,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "metrics.json, per_object.jsonl, tables.md, per_category.md, failure_attribution.png, "
         "overlays/<key>.png (reference joints green, predicted red, drawn with the record's "
         "meta.camera) and index.md. Generations go to OUT/predictions.jsonl as they finish; running "
-        "the same command again skips keys already there. Example: jax3dc eval run --checkpoint "
+        "the same command again skips keys already there (delete that file to generate afresh, e.g. "
+        "with another checkpoint). The end of the run prints tokens/s. Example: jax3dc eval run --checkpoint "
         "runs/ft/final --data data/shards --out reports/test",
     )
     run.add_argument("--data", nargs="+", required=True, metavar="SHARDS",
