@@ -16,6 +16,7 @@ from __future__ import annotations
 import io
 import json
 import re
+import sys
 import time
 from dataclasses import dataclass
 from functools import partial
@@ -155,7 +156,19 @@ class Generator:
         if not (checkpoint / "config.json").is_file():
             raise InputFileError(checkpoint, "not a checkpoint folder (no config.json)")
         model, config = load_pretrained(checkpoint, dtype=getattr(jnp, dtype))
-        return cls(model, config, load_tokenizer(checkpoint), ImageProcessorConfig.from_pretrained(checkpoint))
+        # An export with weights only (train's export_hf) falls back to the packaged Qwen3 tokenizer
+        # and the released Qwen3-VL image settings, said on stderr so nobody mistakes it silently.
+        if (checkpoint / "tokenizer.json").is_file():
+            tokenizer = load_tokenizer(checkpoint)
+        else:
+            print(f"note: no tokenizer.json in {checkpoint}; using the packaged Qwen3 tokenizer", file=sys.stderr)
+            tokenizer = load_tokenizer()
+        if (checkpoint / "preprocessor_config.json").is_file():
+            processor = ImageProcessorConfig.from_pretrained(checkpoint)
+        else:
+            print(f"note: no preprocessor_config.json in {checkpoint}; using Qwen3-VL's image settings", file=sys.stderr)
+            processor = ImageProcessorConfig.qwen3_vl()
+        return cls(model, config, tokenizer, processor)
 
     def images(self, record: Record) -> list:
         try:

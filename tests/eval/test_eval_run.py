@@ -19,6 +19,7 @@ from PIL import Image
 from data_pipeline.factories import generate_object
 from data_pipeline.record import Record, encode_record
 from jax3dc.cli import main
+from jax3dc.errors import InputFileError
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt
@@ -244,3 +245,21 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
             length = int(alone.lengths[0])
             assert n == length
             assert text == generator.tokenizer.decode(np.asarray(alone.tokens)[0, :length].tolist())
+
+
+def test_weights_only_export_falls_back_to_packaged_tokenizer(checkpoint: Path, tmp_path: Path, capsys) -> None:
+    import shutil
+
+    from eval.generation import Generator
+    from jax3dc.model.processor import ImageProcessorConfig
+
+    for path in checkpoint.iterdir():
+        if path.name == "config.json" or path.suffix == ".safetensors" or path.name.endswith(".index.json"):
+            shutil.copy(path, tmp_path / path.name)
+    generator = Generator.load(tmp_path, dtype="float32")
+    assert generator.tokenizer.special.im_end == 151645
+    assert generator.processor == ImageProcessorConfig.qwen3_vl()
+    err = capsys.readouterr().err
+    assert "no tokenizer.json" in err and "no preprocessor_config.json" in err
+    with pytest.raises(InputFileError, match="no config.json"):
+        Generator.load(tmp_path / "missing")
