@@ -110,12 +110,14 @@ def write_overlays(cases: Sequence[Case], records: Mapping[str, Any], refs: Mapp
     return done
 
 
-def index_markdown(name: str, evaluation: Evaluation, overlays: Mapping[str, str], extra: Mapping[str, str]) -> str:
+def index_markdown(name: str, evaluation: Evaluation, overlays: Mapping[str, str], extra: Mapping[str, str],
+                   notes: Sequence[str] = ()) -> str:
     m = evaluation.metrics
     c = m["counts"]
     lines = [f"# Evaluation report: {name}", "",
              f"{c['parsed']}/{c['objects']} predictions parsed; {c['joints_matched']} joints matched of "
              f"{c['joints_ref']} reference / {c['joints_pred']} predicted.", ""]
+    lines += [line for note in notes for line in (note, "")]
     if m["parse_failures"]:
         lines += ["Parse failures by rule: " + ", ".join(f"`{k}` {v}" for k, v in m["parse_failures"].items()), ""]
     lines += ["- [tables.md](tables.md): Tables 1 and 2", "- [per_category.md](per_category.md): metrics per category",
@@ -136,7 +138,7 @@ def index_markdown(name: str, evaluation: Evaluation, overlays: Mapping[str, str
 
 
 def write_report(out: Path, name: str, cases: Sequence[Case], records: Mapping[str, Any], refs: Mapping[str, Any],
-                 overlay_limit: int, extra: Mapping[str, str] = {}) -> Evaluation:
+                 overlay_limit: int, extra: Mapping[str, str] = {}, notes: Sequence[str] = ()) -> Evaluation:
     """Scores ``cases`` and writes the whole report folder; returns the evaluation."""
     evaluation = evaluate(cases)
     write_evaluation(evaluation, out)
@@ -146,7 +148,7 @@ def write_report(out: Path, name: str, cases: Sequence[Case], records: Mapping[s
         (out / "per_category.md").write_text(per_category_markdown(cases, categories), encoding="utf-8")
         failure_chart(evaluation.metrics, out / "failure_attribution.png")
         overlays = write_overlays(cases, records, refs, out / "overlays", overlay_limit)
-        (out / "index.md").write_text(index_markdown(name, evaluation, overlays, extra), encoding="utf-8")
+        (out / "index.md").write_text(index_markdown(name, evaluation, overlays, extra, notes), encoding="utf-8")
     except OSError as e:
         raise InputFileError(out, f"cannot write the report: {e.strerror or e}") from None
     return evaluation

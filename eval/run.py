@@ -58,6 +58,7 @@ def run_eval(args: argparse.Namespace) -> int:
     except OSError as e:
         raise InputFileError(out, f"cannot write: {e.strerror or e}") from None
 
+    notes = []
     if args.predictions is not None:
         preds, name = load_predictions(args.predictions), Path(args.predictions).stem
     elif args.reference_as_prediction:
@@ -66,13 +67,14 @@ def run_eval(args: argparse.Namespace) -> int:
         generator = Generator.load(args.checkpoint, dtype=args.dtype)
         preds, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
                                             args.max_new_tokens, args.bucket)
-        print(stats.summary())
+        notes.append(stats.summary())
+        print(notes[-1])
         name = Path(args.checkpoint).name
     extra = {"references.jsonl": "references.jsonl"}
     if (out / "predictions.jsonl").exists():
         extra["predictions.jsonl"] = "predictions.jsonl"
     evaluation = write_report(out, name, build_cases(refs, preds), by_key, {r.key: r for r in refs},
-                              args.overlays, extra)
+                              args.overlays, extra, notes)
     print(format_tables([(name, evaluation.metrics)]))
     counts = evaluation.metrics["counts"]
     print(f"\n{counts['parsed']}/{counts['objects']} predictions parsed")

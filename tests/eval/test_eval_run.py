@@ -199,6 +199,7 @@ def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoi
     assert main(argv) == 0
     assert batches == [2, 1]
     assert "generated 3 objects" in capsys.readouterr().out
+    assert "generated 3 objects" in (out / "index.md").read_text()
     lines = read_jsonl(out / "predictions.jsonl")
     assert sorted(line["key"] for line in lines) == sorted(keys())
     assert all(1 <= line["new_tokens"] <= 5 and (line["new_tokens"] == 5 or line["stopped"]) for line in lines)
