@@ -1,0 +1,155 @@
+"""A training run described by one frozen dataclass, with `key=value` overrides from the CLI.
+
+What a run did can be read back from its config (written as config.json in the output
+directory) and its metrics log.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import typing
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+from jax3dc.errors import Jax3dcError
+
+
+class ConfigError(Jax3dcError):
+    """An override names no field of TrainConfig, or its value does not parse as the field's type."""
+
+
+@dataclass(frozen=True)
+class MeshConfig:
+    """Device mesh shape over the axes (data, fsdp, tensor); one entry may be -1 = the rest."""
+
+    data: int = 1
+    fsdp: int = -1
+    tensor: int = 1
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything that decides what a training run does. Defaults follow the paper (SPEC §7)."""
+
+    # Model: a preset name (tiny, small, qwen3_vl_4b: random weights) or an HF checkpoint dir.
+    init: str = "small"
+    output_dir: str = "runs/train"
+    # Data: "synthetic" (built-in counting sequences) or a directory the grain loader reads.
+    data: str = "synthetic"
+    val_data: str = ""  # empty: validate on held-out synthetic / the data's own split
+    seq_len: int = 8192
+    image_size: int = 448  # synthetic data only: square image side in pixels
+    batch_size: int = 16  # effective (global) batch in sequences per optimiser step
+    grad_accum: int = 16  # micro-batches per step; batch_size / grad_accum rows at a time
+    steps: int = 1000
+    # Optimiser: AdamW, linear warm-up then cosine decay, clipped global gradient norm.
+    lr: float = 1e-5
+    warmup_steps: int = 30
+    end_lr_ratio: float = 0.0  # cosine ends at lr * end_lr_ratio
+    weight_decay: float = 0.0
+    b1: float = 0.9
+    b2: float = 0.999
+    eps: float = 1e-8
+    clip_norm: float = 1.0
+    # Parameters whose '/'-joined path matches any of these regexes get no gradient and no
+    # optimiser state.
+    freeze: tuple[str, ...] = (r"(^|/)visual/",)
+    # Numerics: compute dtype for matmuls; master_fp32 keeps trainable weights and optimiser
+    # state in float32 (else in the compute dtype, half the memory).
+    compute_dtype: str = "bfloat16"
+    master_fp32: bool = True
+    remat: str = "full"  # full: decoder layers recompute activations in the backward pass; none
+    mesh: MeshConfig = field(default_factory=MeshConfig)
+    seed: int = 0
+    # Cadence (in optimiser steps).
+    log_every: int = 10
+    eval_every: int = 200
+    eval_batches: int = 4
+    save_every: int = 200
+    keep_last: int = 3
+    export_hf: bool = True  # write the final model as an HF directory in output_dir/hf
+
+
+def _parse_value(text: str, kind: Any, name: str) -> Any:
+    origin = typing.get_origin(kind)
+    try:
+        if kind is bool:
+            if text.lower() in ("1", "true", "yes", "on"):
+                return True
+            if text.lower() in ("0", "false", "no", "off"):
+                return False
+            raise ValueError(text)
+        if kind in (int, float, str):
+            return kind(text)
+        if origin is tuple:
+            items = [t for t in text.split(",") if t] if text else []
+            return tuple(_parse_value(t, typing.get_args(kind)[0], name) for t in items)
+    except ValueError:
+        raise ConfigError(f"--set {name}={text}: not a valid {getattr(kind, '__name__', kind)}") from None
+    raise ConfigError(f"--set {name}: field of type {kind} cannot be set from the command line")
+
+
+def _field_types(cls: type) -> dict[str, Any]:
+    hints = typing.get_type_hints(cls)
+    return {f.name: hints[f.name] for f in dataclasses.fields(cls)}
+
+
+def apply_overrides(cfg: Any, overrides: Sequence[str]) -> Any:
+    """Return cfg with each 'a.b=value' applied; nested dataclasses are addressed with dots."""
+    for item in overrides:
+        if "=" not in item:
+            raise ConfigError(f"--set {item!r}: expected key=value")
+        key, text = item.split("=", 1)
+        cfg = _set_path(cfg, key.strip().split("."), text.strip(), key)
+    return cfg
+
+
+def _set_path(obj: Any, path: list[str], text: str, full: str) -> Any:
+    types_ = _field_types(type(obj))
+    name = path[0]
+    if name not in types_:
+        raise ConfigError(f"--set {full}: {type(obj).__name__} has no field {name!r} "
+                          f"(fields: {', '.join(types_)})")
+    if len(path) > 1:
+        child = getattr(obj, name)
+        if not dataclasses.is_dataclass(child):
+            raise ConfigError(f"--set {full}: {name!r} has no sub-fields")
+        return dataclasses.replace(obj, **{name: _set_path(child, path[1:], text, full)})
+    if dataclasses.is_dataclass(getattr(obj, name)):
+        raise ConfigError(f"--set {full}: {name!r} is a group; set one of its fields ({name}.x=...)")
+    return dataclasses.replace(obj, **{name: _parse_value(text, types_[name], full)})
+
+
+def describe_fields(cls: type = TrainConfig, prefix: str = "") -> list[str]:
+    """One 'name (type, default)' line per settable field, for --help."""
+    lines = []
+    default = cls()
+    for name, kind in _field_types(cls).items():
+        value = getattr(default, name)
+        if dataclasses.is_dataclass(value):
+            lines += describe_fields(type(value), prefix + name + ".")
+        else:
+            shown = ",".join(value) if isinstance(value, tuple) else value
+            kind_name = getattr(kind, "__name__", str(kind).replace("typing.", ""))
+            lines.append(f"  {prefix}{name} ({kind_name}) = {shown}")
+    return lines
+
+
+def to_json(cfg: TrainConfig) -> str:
+    return json.dumps(dataclasses.asdict(cfg), indent=1, sort_keys=True)
+
+
+def validate(cfg: TrainConfig) -> None:
+    """Reject settings that cannot work before any device work starts."""
+    if cfg.batch_size % cfg.grad_accum:
+        raise ConfigError(f"batch_size {cfg.batch_size} is not a multiple of grad_accum {cfg.grad_accum}")
+    if cfg.remat not in ("none", "full"):
+        raise ConfigError(f"remat {cfg.remat!r}: expected none or full")
+    if cfg.compute_dtype not in ("bfloat16", "float32", "float16"):
+        raise ConfigError(f"compute_dtype {cfg.compute_dtype!r}: expected bfloat16, float32 or float16")
+    for name in ("steps", "seq_len", "log_every", "eval_every", "save_every", "keep_last"):
+        if getattr(cfg, name) <= 0:
+            raise ConfigError(f"{name} must be positive, got {getattr(cfg, name)}")
+    if cfg.warmup_steps < 0 or cfg.warmup_steps >= cfg.steps:
+        raise ConfigError(f"warmup_steps {cfg.warmup_steps} must be in [0, steps={cfg.steps})")

@@ -1,0 +1,227 @@
+"""A training run from start (or from its latest checkpoint) to the exported model.
+
+    state <- latest checkpoint of output_dir, else fresh (preset weights or HF checkpoint)
+    repeat until `steps`: next batch -> jitted step -> loss finite? -> log / validate / save
+    final checkpoint, then the model as an HF directory in output_dir/hf
+
+A non-finite loss stops the run before anything from that step is saved, so the latest
+checkpoint on disk is the last good one; the error message names it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass
+from typing import Callable, Iterator
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from jax.sharding import Mesh
+
+from jax3dc.errors import Jax3dcError
+from train import model_state
+from train.batch import ImageLayout, SyntheticBatches, check_batch
+from train.checkpoint import RunCheckpoints
+from train.config import ConfigError, TrainConfig, to_json, validate
+from train.metrics_log import FlopsModel, MetricsLog, peak_flops
+from train.optimizer import build_optimizer, learning_rate
+from train.parallel import batch_sharding, build_mesh, global_batch, replicated, to_host
+from train.step import TrainState, make_eval_step, make_train_step
+
+
+class NonFiniteLossError(Jax3dcError):
+    """The loss became NaN or infinite; the run stopped without saving that step."""
+
+
+@dataclass
+class RunResult:
+    final_step: int
+    last_loss: float
+    best_val_loss: float | None
+    output_dir: str
+
+
+def image_layout(cfg: TrainConfig, mcfg) -> ImageLayout:
+    v = mcfg.vision
+    side, unit = cfg.image_size // v.patch_size, v.spatial_merge_size
+    if cfg.image_size % (v.patch_size * unit):
+        raise ConfigError(f"image_size {cfg.image_size} is not a multiple of patch x merge = {v.patch_size * unit}")
+    return ImageLayout(mcfg.vision_start_token_id, mcfg.image_token_id, mcfg.vision_end_token_id,
+                       (side, side), unit, v.patch_dim)
+
+
+def make_loader(cfg: TrainConfig, mcfg, split: str, padding: bool = True) -> Iterator:
+    """This process's loader for `split` ('train' or 'val')."""
+    if cfg.data != "synthetic":
+        raise ConfigError(f"data {cfg.data!r}: only 'synthetic' is available until the ArrayRecord "
+                          "loader (issue 5) lands")
+    text_vocab = min(mcfg.text.vocab_size, mcfg.vision_start_token_id, mcfg.image_token_id)
+    return SyntheticBatches(vocab=mcfg.text.vocab_size, text_vocab=text_vocab, seq_len=cfg.seq_len,
+                            global_rows=cfg.batch_size, seed=cfg.seed + (0 if split == "train" else 1000),
+                            image=image_layout(cfg, mcfg) if cfg.image_size else None,
+                            process_index=jax.process_index(), process_count=jax.process_count(),
+                            padding=padding)
+
+
+def opt_state_shardings(tx: optax.GradientTransformation, params, params_sharding, mesh: Mesh):
+    """Moments are placed like their parameters; counters and the like are replicated."""
+    shapes = jax.eval_shape(tx.init, params)
+    return optax.tree_map_params(tx, lambda _, s: s, shapes, params_sharding,
+                                 transform_non_params=lambda _: replicated(mesh))
+
+
+class Trainer:
+    """Holds the mesh, model, optimiser, jitted steps and checkpoints of one run."""
+
+    def __init__(self, cfg: TrainConfig, attention_impl: str | None = None):
+        validate(cfg)
+        self.cfg = cfg
+        self.mesh = build_mesh(cfg.mesh)
+        self.model = model_state.create(cfg, self.mesh, attention_impl)
+        self.tx = build_optimizer(cfg)
+        self.schedule = learning_rate(cfg)
+        rep = replicated(self.mesh)
+        opt_sh = opt_state_shardings(self.tx, self.model.trainable, self.model.trainable_sharding, self.mesh)
+        opt_state = jax.jit(self.tx.init, out_shardings=opt_sh)(self.model.trainable)
+        rng = jax.device_put(jax.random.key_data(jax.random.key(cfg.seed)), rep)
+        self.state = TrainState(step=jax.device_put(jnp.zeros((), jnp.int32), rep),
+                                params=self.model.trainable, opt_state=opt_state, rng=rng)
+        self.state_sharding = TrainState(step=rep, params=self.model.trainable_sharding,
+                                         opt_state=opt_sh, rng=rep)
+        self.model.trainable = None  # owned by self.state from here on (donated each step)
+        self.accum = cfg.grad_accum
+        self._train_step = self._eval_step = None
+
+    # ------------------------------------------------------------------ steps
+    def _batch_shardings(self, batch: dict) -> dict:
+        return {k: batch_sharding(self.mesh, v.ndim, leading_accum=True) for k, v in batch.items()}
+
+    def train_step(self, batch: dict) -> dict:
+        """One optimiser step on this process's rows `batch`; returns device metrics."""
+        check_batch(batch, self.cfg.batch_size // jax.process_count(), self.cfg.seq_len)
+        g = global_batch(batch, self.mesh, self.accum)
+        if self._train_step is None:
+            compute, _ = model_state.dtypes(self.cfg)
+            self._train_step = make_train_step(
+                self.model.graphdef, model_state.score, self.tx, self.schedule, compute, self.mesh,
+                self.state_sharding, self.model.frozen_sharding, self._batch_shardings(g))
+        self.state, metrics = self._train_step(self.state, self.model.frozen, g)
+        return metrics
+
+    def validate(self, loader: Iterator, batches: int) -> float:
+        """Mean token NLL over `batches` batches of `loader`."""
+        nll = scored = 0.0
+        for _ in range(batches):
+            g = global_batch(next(loader), self.mesh, self.accum)
+            if self._eval_step is None:
+                compute, _ = model_state.dtypes(self.cfg)
+                self._eval_step = make_eval_step(
+                    self.model.graphdef, model_state.score, compute, self.mesh, self.state_sharding,
+                    self.model.frozen_sharding, self._batch_shardings(g))
+            n, _, s = self._eval_step(self.state.params, self.model.frozen, g)
+            nll += float(to_host(n))
+            scored += float(to_host(s))
+        return nll / max(scored, 1.0)
+
+    # ------------------------------------------------------------------ checkpoints
+    def restore(self, ckpt: RunCheckpoints, step: int) -> tuple[dict, dict]:
+        state, frozen, loader_state, meta = ckpt.restore(step, self.state, self.state_sharding,
+                                                         self.model.frozen, self.model.frozen_sharding)
+        self.state, self.model.frozen = state, frozen
+        return loader_state, meta
+
+    def save(self, ckpt: RunCheckpoints, loader, val_loss: float | None, best_val: float | None) -> None:
+        step = int(to_host(self.state.step))
+        ckpt.save(step, self.state, self.model.frozen, loader.get_state(),
+                  {"step": step, "val_loss": val_loss, "best_val_loss": best_val}, val_loss=val_loss)
+
+    def export(self, directory: str) -> None:
+        from jax.experimental import multihost_utils
+
+        self.model.trainable = self.state.params
+        if jax.process_count() > 1:  # every process takes part in the gather; one writes
+            self.model.trainable = multihost_utils.process_allgather(self.state.params, tiled=True)
+            self.model.frozen = multihost_utils.process_allgather(self.model.frozen, tiled=True)
+        if jax.process_index() == 0:
+            model_state.export_hf(self.model, directory)
+        self.model.trainable = None
+
+    def flops_model(self) -> FlopsModel:
+        patches = (self.cfg.image_size // self.model.config.vision.patch_size) ** 2 if self.cfg.image_size else 0
+        frozen = model_state.count_params(self.model.frozen)
+        return FlopsModel.from_model_config(self.model.config, vision_params=frozen,
+                                            patches_per_image=patches)
+
+
+def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
+        attention_impl: str | None = None) -> RunResult:
+    """Train per `cfg`, resuming from output_dir's latest checkpoint if there is one.
+
+    `on_step(step, metrics)` is called after every step with host floats (for tools and tests).
+    """
+    out = cfg.output_dir
+    lead = jax.process_index() == 0
+    if lead:
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "config.json"), "w") as f:
+            f.write(to_json(cfg))
+    trainer = Trainer(cfg, attention_impl)
+    loader = make_loader(cfg, trainer.model.config, "train")
+    ckpt = RunCheckpoints(os.path.join(out, "checkpoints"), cfg.keep_last)
+    start = ckpt.latest_step() or 0
+    log = MetricsLog(out, total_steps=cfg.steps, first_step=start, enabled=lead)
+    best_val = None
+    if start:
+        loader_state, meta = trainer.restore(ckpt, start)
+        loader.set_state(loader_state)
+        best_val = meta.get("best_val_loss")
+        log.message(f"resumed from step {start} ({ckpt.directory})")
+    flops = trainer.flops_model()
+    peak = peak_flops(jax.devices()[0].device_kind)
+    tokens_per_step = cfg.batch_size * cfg.seq_len
+    last_loss = math.nan
+    timer, timed_steps = None, 0
+    try:
+        for step in range(start + 1, cfg.steps + 1):
+            metrics = trainer.train_step(next(loader))
+            values = {k: float(to_host(v)) for k, v in metrics.items()}
+            if not math.isfinite(values["loss"]):
+                ckpt.wait()
+                good = ckpt.latest_step()
+                raise NonFiniteLossError(
+                    f"loss is {values['loss']} at step {step}; stopped without saving it. Last good "
+                    f"checkpoint: {'step %d in %s' % (good, ckpt.directory) if good else 'none'}")
+            last_loss = values["loss"]
+            if timer is None:  # the first step compiles: time from its end
+                timer = time.perf_counter()
+            else:
+                timed_steps += 1
+            if step % cfg.log_every == 0 or step == cfg.steps:
+                if timed_steps:
+                    dt = (time.perf_counter() - timer) / timed_steps
+                    values["tokens_per_s"] = tokens_per_step / dt
+                    if peak:
+                        values["mfu"] = flops.step_flops(cfg.batch_size, cfg.seq_len) / dt / (peak * jax.device_count())
+                    timer, timed_steps = time.perf_counter(), 0
+                log.write(step, values)
+            val_loss = None
+            if step % cfg.eval_every == 0 or step == cfg.steps:
+                val_loss = trainer.validate(make_loader(cfg, trainer.model.config, "val"), cfg.eval_batches)
+                best_val = val_loss if best_val is None else min(best_val, val_loss)
+                log.write(step, {"loss": val_loss}, kind="val")
+            if step % cfg.save_every == 0 or step == cfg.steps:
+                trainer.save(ckpt, loader, val_loss, best_val)
+            log.advance()
+            if on_step is not None:
+                on_step(step, values)
+        ckpt.wait()
+        if cfg.export_hf and start < cfg.steps:
+            trainer.export(os.path.join(out, "hf"))
+    finally:
+        ckpt.close()
+        log.close()
+    return RunResult(cfg.steps, last_loss, best_val, out)

@@ -1,0 +1,158 @@
+"""The model as the trainer holds it: a graph definition plus two parameter states, trainable
+(master dtype, optimised) and frozen (compute dtype, never differentiated), both placed on the
+mesh by their logical axes; and how a batch is scored by it.
+
+The model itself (jax3dc.model) knows nothing about optimisers or data.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import nnx
+from jax.sharding import Mesh
+
+from jax3dc.model.config import Qwen3VLConfig
+from jax3dc.model.qwen3_vl import Qwen3VL
+from train.config import ConfigError, TrainConfig
+from train.optimizer import trainable_filter
+from train.parallel import state_shardings
+from train.step import cast_floats, masked_cross_entropy
+
+PRESETS = ("tiny", "small", "qwen3_vl_2b", "qwen3_vl_4b", "qwen3_vl_8b")
+LOSS_CHUNK = 1024  # sequence positions per logits chunk: bounds the [rows, chunk, vocab] buffer
+
+
+@dataclass
+class ModelState:
+    """Everything the trainer needs to run, save and export the model."""
+
+    config: Qwen3VLConfig
+    graphdef: nnx.GraphDef
+    trainable: Any  # nnx.State
+    frozen: Any  # nnx.State
+    trainable_sharding: Any
+    frozen_sharding: Any
+
+    def merged(self) -> nnx.Module:
+        return nnx.merge(self.graphdef, self.trainable, self.frozen)
+
+
+def model_config(init: str) -> Qwen3VLConfig:
+    """Preset name, or an HF checkpoint directory's config.json."""
+    if init in PRESETS:
+        return getattr(Qwen3VLConfig, init)()
+    path = os.path.join(init, "config.json")
+    if not os.path.isfile(path):
+        raise ConfigError(f"init {init!r} is neither a preset ({', '.join(PRESETS)}) nor a directory "
+                          "with config.json")
+    with open(path) as f:
+        return Qwen3VLConfig.from_hf_dict(json.load(f))
+
+
+def dtypes(cfg: TrainConfig) -> tuple[jnp.dtype, jnp.dtype]:
+    """(compute dtype, master dtype of the trainable parameters)."""
+    compute = jnp.dtype(cfg.compute_dtype)
+    return compute, (jnp.dtype(jnp.float32) if cfg.master_fp32 else compute)
+
+
+def _constructor(cfg: TrainConfig, mcfg: Qwen3VLConfig, attention_impl: str | None):
+    compute, master = dtypes(cfg)
+    return lambda: Qwen3VL(mcfg, rngs=nnx.Rngs(cfg.seed), dtype=compute, param_dtype=master,
+                           attention_impl=attention_impl, remat=cfg.remat == "full")
+
+
+def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None) -> ModelState:
+    """Build the model on the mesh: random weights for a preset, else the HF checkpoint's."""
+    mcfg = model_config(cfg.init)
+    compute, _ = dtypes(cfg)
+    build = _constructor(cfg, mcfg, attention_impl)
+    is_trainable = trainable_filter(cfg.freeze)
+    graphdef, abs_train, abs_frozen = nnx.split(nnx.eval_shape(build), is_trainable, ...)
+    train_sh, frozen_sh = state_shardings(abs_train, mesh), state_shardings(abs_frozen, mesh)
+    if not jax.tree.leaves(abs_train):
+        raise ConfigError(f"freeze patterns {cfg.freeze} leave no parameter to train")
+
+    if cfg.init in PRESETS:
+        def init():
+            _, t, f = nnx.split(build(), is_trainable, ...)
+            return t, cast_floats(f, compute)
+
+        with jax.set_mesh(mesh):
+            trainable, frozen = jax.jit(init, out_shardings=(train_sh, frozen_sh))()
+    else:
+        trainable, frozen = _load_hf(cfg, mcfg, mesh, build, is_trainable, train_sh, frozen_sh, compute)
+    return ModelState(mcfg, graphdef, trainable, frozen, train_sh, frozen_sh)
+
+
+def _load_hf(cfg, mcfg, mesh, build, is_trainable, train_sh, frozen_sh, compute):
+    from jax3dc.model import params as hf_params
+
+    model = hf_params.load_pretrained(cfg.init, build, mesh)
+    _, t, f = nnx.split(model, is_trainable, ...)
+    cast = jax.jit(lambda t, f: (t, cast_floats(f, compute)), out_shardings=(train_sh, frozen_sh))
+    return cast(t, f)
+
+
+def export_hf(state: ModelState, directory: str) -> None:
+    """Write the model as an HF directory (safetensors + config.json)."""
+    from jax3dc.model import params as hf_params
+
+    hf_params.save_pretrained(state.merged(), directory)
+
+
+def count_params(tree: Any) -> int:
+    return int(sum(np.prod(x.shape) for x in jax.tree.leaves(tree)))
+
+
+def model_inputs(micro: dict[str, jax.Array]) -> dict[str, jax.Array | None]:
+    """Batch-protocol arrays -> the model's keyword arguments (one image per row)."""
+    pixel_values = micro.get("pixel_values")
+    if pixel_values is not None:
+        pixel_values = pixel_values.reshape(-1, pixel_values.shape[-1])
+    position_ids = micro.get("position_ids")
+    if position_ids is not None:  # protocol [rows, 3, L] -> model [3, rows, L]
+        position_ids = jnp.transpose(position_ids, (1, 0, 2))
+    return dict(input_ids=micro["input_ids"], attention_mask=micro.get("attention_mask"),
+                pixel_values=pixel_values, image_grid_thw=micro.get("image_grid_thw"),
+                position_ids=position_ids)
+
+
+def score(model: Qwen3VL, micro: dict[str, jax.Array]) -> tuple[jax.Array, jax.Array]:
+    """(sum of masked token NLL, number of correct argmax predictions) for one micro-batch.
+
+    Logits are made LOSS_CHUNK positions at a time and recomputed in the backward pass, so the
+    full [rows, L, vocab] float32 logits never exist at once.
+    """
+    hidden = model(**model_inputs(micro), return_hidden=True)
+    labels, mask = micro["labels"], micro["loss_mask"]
+    rows, length, width = hidden.shape
+    chunk = LOSS_CHUNK if length % LOSS_CHUNK == 0 else length
+    if chunk == length:
+        return masked_cross_entropy(model.logits(hidden), labels, mask)
+    n = length // chunk
+    split = lambda x: jnp.moveaxis(x.reshape(rows, n, chunk, *x.shape[2:]), 1, 0)
+
+    @jax.checkpoint
+    def one(h, y, m):
+        return masked_cross_entropy(model.logits(h), y, m)
+
+    def body(carry, xs):
+        nll, correct = one(*xs)
+        return (carry[0] + nll, carry[1] + correct), None
+
+    zero = jnp.zeros((), jnp.float32)
+    (nll, correct), _ = jax.lax.scan(body, (zero, zero), (split(hidden), split(labels), split(mask)))
+    return nll, correct
+
+
+def vision_params(state: ModelState) -> int:
+    """Parameters of the vision tower and its mergers (run forward only when frozen)."""
+    visual = nnx.state(state.merged(), lambda path, _: path and path[0] == "visual")
+    return count_params(visual)

@@ -1,0 +1,115 @@
+"""One optimiser step: masked cross-entropy over micro-batches, gradients of the trainable
+parameters only, clipped AdamW update. Jitted once with explicit shardings and with the state
+it replaces donated.
+
+The loss of a step is the mean over all scored tokens of the whole effective batch (not a mean
+of per-micro-batch means), so splitting a batch into more micro-batches or over more devices
+changes only float rounding.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import flax.struct
+import jax
+import jax.numpy as jnp
+import optax
+from flax import nnx
+from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
+
+from train.parallel import BATCH_AXES
+
+# score(model, micro_batch) -> (sum of masked token NLL, number of correct argmax predictions)
+Score = Callable[[nnx.Module, dict[str, jax.Array]], tuple[jax.Array, jax.Array]]
+
+
+@flax.struct.dataclass
+class TrainState:
+    """What changes from step to step (the frozen parameters live outside it)."""
+
+    step: jax.Array  # int32 scalar: optimiser steps taken
+    params: Any  # nnx.State of the trainable parameters (master dtype)
+    opt_state: Any
+    rng: jax.Array  # uint32[2] raw key, split once per step
+
+
+def cast_floats(tree: Any, dtype: jnp.dtype) -> Any:
+    return jax.tree.map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, tree)
+
+
+def masked_cross_entropy(logits: jax.Array, labels: jax.Array, mask: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Sum over scored positions of -log p(label) (in float32) and of argmax == label."""
+    logits = logits.astype(jnp.float32)
+    logz = jax.nn.logsumexp(logits, axis=-1)
+    picked = jnp.take_along_axis(logits, labels[..., None], axis=-1)[..., 0]
+    mask = mask.astype(jnp.float32)
+    nll = jnp.sum((logz - picked) * mask)
+    correct = jnp.sum((jnp.argmax(logits, axis=-1) == labels) * mask)
+    return nll, correct
+
+
+def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTransformation,
+                    schedule: optax.Schedule, compute_dtype: jnp.dtype, mesh: Mesh,
+                    state_sharding: Any, frozen_sharding: Any, batch_sharding: Any) -> Callable:
+    """jit(step)(state, frozen, batch) -> (state, metrics). `batch` arrays are [accum, rows, ...]."""
+    micro_spec = lambda x: NamedSharding(mesh, P(BATCH_AXES, *([None] * (x.ndim - 2))))
+
+    def loss_sum(params, frozen, micro, n_scored):
+        model = nnx.merge(graphdef, cast_floats(params, compute_dtype), cast_floats(frozen, compute_dtype))
+        nll, correct = score(model, micro)
+        return nll / n_scored, (nll, correct)
+
+    grad_fn = jax.grad(loss_sum, has_aux=True)
+
+    def step(state: TrainState, frozen, batch):
+        n_scored = jnp.maximum(jnp.sum(batch["loss_mask"].astype(jnp.float32)), 1.0)
+
+        def micro_step(carry, micro):
+            grads, nll, correct = carry
+            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec(batch[k])) for k, v in micro.items()}
+            g, (m_nll, m_correct) = grad_fn(state.params, frozen, micro, n_scored)
+            grads = jax.tree.map(lambda a, b: a + b.astype(a.dtype), grads, g)
+            return (grads, nll + m_nll, correct + m_correct), None
+
+        if jax.tree.leaves(batch)[0].shape[0] == 1:  # no accumulation: no float32 gradient buffer
+            micro = {k: jax.lax.with_sharding_constraint(v[0], micro_spec(v)) for k, v in batch.items()}
+            grads, (nll, correct) = grad_fn(state.params, frozen, micro, n_scored)
+        else:
+            zeros = jax.tree.map(lambda p: jnp.zeros(p.shape, jnp.float32), state.params)
+            init = (zeros, jnp.zeros((), jnp.float32), jnp.zeros((), jnp.float32))
+            (grads, nll, correct), _ = jax.lax.scan(micro_step, init, batch)
+        grad_norm = optax.global_norm(grads)
+        grads = jax.tree.map(lambda g, p: g.astype(p.dtype), grads, state.params)
+        updates, opt_state = tx.update(grads, state.opt_state, state.params)
+        params = optax.apply_updates(state.params, updates)
+        rng, _ = jax.random.split(state.rng)
+        metrics = {"loss": nll / n_scored, "accuracy": correct / n_scored, "grad_norm": grad_norm,
+                   "lr": schedule(state.step), "scored_tokens": n_scored}
+        new = TrainState(step=state.step + 1, params=params, opt_state=opt_state, rng=rng)
+        return new, metrics
+
+    rep = NamedSharding(mesh, P())
+    return jax.jit(step, in_shardings=(state_sharding, frozen_sharding, batch_sharding),
+                   out_shardings=(state_sharding, rep), donate_argnums=(0,))
+
+
+def make_eval_step(graphdef: nnx.GraphDef, score: Score, compute_dtype: jnp.dtype, mesh: Mesh,
+                   state_sharding: Any, frozen_sharding: Any, batch_sharding: Any) -> Callable:
+    """jit(eval)(params, frozen, batch) -> (nll sum, correct sum, scored tokens) over all micro-batches."""
+    micro_spec = lambda x: NamedSharding(mesh, P(BATCH_AXES, *([None] * (x.ndim - 2))))
+
+    def evaluate(params, frozen, batch):
+        def body(carry, micro):
+            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec(batch[k])) for k, v in micro.items()}
+            model = nnx.merge(graphdef, cast_floats(params, compute_dtype), cast_floats(frozen, compute_dtype))
+            nll, correct = score(model, micro)
+            return (carry[0] + nll, carry[1] + correct), None
+
+        zero = jnp.zeros((), jnp.float32)
+        (nll, correct), _ = jax.lax.scan(body, (zero, zero), batch)
+        return nll, correct, jnp.sum(batch["loss_mask"].astype(jnp.float32))
+
+    rep = NamedSharding(mesh, P())
+    return jax.jit(evaluate, in_shardings=(state_sharding.params, frozen_sharding, batch_sharding),
+                   out_shardings=rep)
