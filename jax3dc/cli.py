@@ -20,6 +20,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "jax3dc.structure_cli",
     "jax3dc.export.cli",
     "eval.cli",
+    "train.cli",
 )
 
 

@@ -1,0 +1,40 @@
+"""`jax3dc train`: fine-tune (or train from scratch) per a TrainConfig with key=value overrides."""
+
+from __future__ import annotations
+
+import argparse
+
+from train.config import TrainConfig, apply_overrides, describe_fields
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "train", help="fine-tune Qwen3-VL on structure data (sharded over all devices)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Train from an HF checkpoint directory (--init DIR) or a preset with random "
+                    "weights (--init tiny|small|qwen3_vl_4b). The vision tower is frozen; the run "
+                    "resumes from the latest checkpoint in --output-dir if there is one.",
+        epilog="Any setting can be changed with --set NAME=VALUE (repeatable), e.g.\n"
+               "  jax3dc train --init tiny --set seq_len=64 --set mesh.fsdp=4 --set lr=1e-5\n\n"
+               "Settings (name (type) = default):\n" + "\n".join(describe_fields()))
+    p.add_argument("--init", help="preset name or HF checkpoint directory")
+    p.add_argument("--output-dir", help="run directory: checkpoints, metrics.jsonl, hf/ export")
+    p.add_argument("--steps", type=int, help="optimiser steps")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="override a setting")
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    from train.distributed import initialize_from_env
+
+    initialize_from_env()
+    overrides = list(args.set)
+    for name, value in (("init", args.init), ("output_dir", args.output_dir), ("steps", args.steps)):
+        if value is not None:
+            overrides.insert(0, f"{name}={value}")
+    cfg = apply_overrides(TrainConfig(), overrides)
+    from train.loop import run
+
+    result = run(cfg)
+    print(f"trained to step {result.final_step}: loss {result.last_loss:.4f}, run in {result.output_dir}")
+    return 0
