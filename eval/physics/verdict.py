@@ -1,0 +1,124 @@
+"""Per-joint and per-object verdicts from the check results (pure numpy over the batched tables).
+
+Reasons are short stable strings: "penetrates parent at rest", "penetrates part P at q=V",
+"detached from parent at q=V", "pivot detached", "limit unreachable: lo|hi", and object-level
+"rest interpenetration: parts A,B", "combination interpenetration: parts A,B",
+"unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mujoco
+import numpy as np
+import trimesh
+
+from eval.physics import cpu_backend
+from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
+from eval.physics.states import StateBatch, check_states
+from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT,
+                                     GRAVITY_TILT_RAD, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU,
+                                     PENETRATION_TOL_NU, REST_PENETRATION_TOL_NU)
+from jax3dc.structure.schema import Structure
+
+SETTLE_STEPS = 400  # dynamics steps (0.8 s) for the gravity and reachability rollouts
+
+
+def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
+                 backend: str = "c") -> dict[str, Any]:
+    """The verdict {"ok", "joints": {id: {"ok", "reasons"}}, "checks": {...}} of one object."""
+    kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale))
+    states = check_states(kinematic)
+    distances = kinematic_distances(kinematic, states.qpos, backend)
+    return verdict_from(structure, parts, kinematic, states, distances)
+
+
+def kinematic_distances(sim: SimModel, qpos: np.ndarray, backend: str) -> np.ndarray:
+    """[S, nbody, nbody] smallest contact distance per body pair (metres), from C MuJoCo or MJX."""
+    if backend == "mjx":
+        from eval.physics.mjx_backend import mjx_pair_distances
+        return mjx_pair_distances(sim.model, qpos)
+    return cpu_backend.pair_distances(sim.model, qpos)
+
+
+def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: SimModel, states: StateBatch,
+                 distances: np.ndarray) -> dict[str, Any]:
+    scale = sim.scale
+    body_part = {b: p for p, b in sim.part_body.items()}
+    group = sim.group_of_body
+    nbody = sim.model.nbody
+    distinct = (group[:, None] != group[None, :]) & (group[:, None] >= 0) & (group[None, :] >= 0)
+    rest_pen = (distances[0] < -REST_PENETRATION_TOL_NU * scale) & distinct
+    reasons: dict[int, list[str]] = {p: [] for p in sim.joint_parts}
+    checks: dict[str, Any] = {}
+    checks["rest"] = sorted({f"rest interpenetration: parts {min(body_part[a], body_part[b])},{max(body_part[a], body_part[b])}"
+                             for a, b in zip(*np.nonzero(rest_pen)) if a < b})
+    pen = (distances < -PENETRATION_TOL_NU * scale) & distinct[None] & ~rest_pen[None]
+    for k, part in enumerate(sim.joint_parts):
+        unit = 1.0 if sim.joint_type[k] == "hinge" else scale
+        moved = sim.moved_by[k]
+        child, parent = sim.part_body[part], sim.parent_body[k]
+        if rest_pen[child, parent]:
+            reasons[part].append("penetrates parent at rest")
+        across = moved[:, None] ^ moved[None, :]
+        rows = _nearest_rest_first(np.nonzero(states.joint == k)[0], states.value, sim.model.qpos0[sim.joint_qpos[k]])
+        hit = None
+        for s in rows:
+            pairs = np.argwhere(pen[s] & across)
+            if len(pairs):
+                a, b = pairs[0]
+                other = b if moved[a] else a
+                hit = f"penetrates part {body_part[other]} at q={states.value[s] / unit:.3f}"
+                break
+        if hit:
+            reasons[part].append(hit)
+        parent_group = group == group[parent]
+        for s in rows:
+            near = distances[s][np.ix_(moved, parent_group)]
+            if not np.any(near < DETACH_TOL_NU * scale):
+                reasons[part].append(f"detached from parent at q={states.value[s] / unit:.3f}")
+                break
+        if not _pivot_attached(structure, parts, part):
+            reasons[part].append("pivot detached")
+    combos = states.joint == -2
+    found = set()
+    for s in np.nonzero(combos)[0]:
+        for a, b in np.argwhere(pen[s]):
+            if a < b:
+                found.add(f"combination interpenetration: parts {min(body_part[a], body_part[b])},{max(body_part[a], body_part[b])}")
+    single = {tuple(sorted((a, b))) for s in np.nonzero(states.joint >= 0)[0] for a, b in np.argwhere(pen[s])}
+    checks["combinations"] = sorted(r for r in found if not _pair_of(r) & {(body_part[a], body_part[b]) for a, b in single})
+    del nbody
+    joints = {str(p): {"ok": not r, "reasons": r} for p, r in reasons.items()}
+    ok = all(j["ok"] for j in joints.values()) and not checks["rest"] and not checks["combinations"]
+    return {"ok": ok, "joints": joints, "checks": checks}
+
+
+def _pair_of(reason: str) -> set[tuple[int, int]]:
+    a, b = (int(x) for x in reason.rsplit(" ", 1)[1].split(","))
+    return {(a, b), (b, a)}
+
+
+def _nearest_rest_first(rows: np.ndarray, values: np.ndarray, rest: float) -> np.ndarray:
+    return rows[np.argsort(np.abs(values[rows] - rest), kind="stable")]
+
+
+def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int) -> bool:
+    """A hinge's axis line passes within ATTACH_TOL_NU of the child and of its parent (nu, rest pose).
+
+    Slides are not checked: their pivot does not change the motion.
+    """
+    node = structure.nodes[part]
+    if node.joint is None or node.joint.type != "hinge":
+        return True
+    axis = np.asarray(node.joint.axis, dtype=np.float64)
+    axis /= np.linalg.norm(axis)
+    pivot = np.asarray(node.joint.pivot, dtype=np.float64)
+
+    def line_distance(mesh: trimesh.Trimesh) -> float:
+        points = np.concatenate([mesh.vertices, mesh.sample(4000, seed=0)]) if len(mesh.faces) else mesh.vertices
+        rel = points - pivot
+        return float(np.min(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
+
+    return line_distance(parts[part]) <= ATTACH_TOL_NU and line_distance(parts[node.parent]) <= ATTACH_TOL_NU
