@@ -20,6 +20,8 @@ from jax.sharding import Mesh
 
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
+from jax3dc.model.random_weights import build_random
+from jax3dc.sharding import model_shardings
 from train.config import ConfigError, TrainConfig
 from train.optimizer import trainable_filter
 from train.parallel import state_shardings
@@ -80,21 +82,23 @@ def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None) -> M
         raise ConfigError(f"freeze patterns {cfg.freeze} leave no parameter to train")
 
     if cfg.init in PRESETS:
-        def init():
-            _, t, f = nnx.split(build(), is_trainable, ...)
-            return t, cast_floats(f, compute)
-
-        with jax.set_mesh(mesh):
-            trainable, frozen = jax.jit(init, out_shardings=(train_sh, frozen_sh))()
+        # One small fill program per parameter shape: a jitted 4B initialiser compiles for minutes.
+        model = build_random(build, seed=cfg.seed, shardings=model_shardings(nnx.eval_shape(build), mesh))
+        _, t, f = nnx.split(model, is_trainable, ...)
+        cast = jax.jit(lambda t, f: (t, cast_floats(f, compute)), out_shardings=(train_sh, frozen_sh))
+        trainable, frozen = cast(t, f)
     else:
-        trainable, frozen = _load_hf(cfg, mcfg, mesh, build, is_trainable, train_sh, frozen_sh, compute)
+        trainable, frozen = _load_hf(cfg, mesh, attention_impl, is_trainable, train_sh, frozen_sh, compute)
     return ModelState(mcfg, graphdef, trainable, frozen, train_sh, frozen_sh)
 
 
-def _load_hf(cfg, mcfg, mesh, build, is_trainable, train_sh, frozen_sh, compute):
+def _load_hf(cfg, mesh, attention_impl, is_trainable, train_sh, frozen_sh, compute):
     from jax3dc.model import params as hf_params
 
-    model = hf_params.load_pretrained(cfg.init, build, mesh)
+    _, master = dtypes(cfg)
+    model, _ = hf_params.load_pretrained(cfg.init, dtype=master, mesh=mesh, compute_dtype=compute,
+                                         attention_impl=attention_impl,
+                                         remat=cfg.remat == "full")
     _, t, f = nnx.split(model, is_trainable, ...)
     cast = jax.jit(lambda t, f: (t, cast_floats(f, compute)), out_shardings=(train_sh, frozen_sh))
     return cast(t, f)
@@ -104,7 +108,8 @@ def export_hf(state: ModelState, directory: str) -> None:
     """Write the model as an HF directory (safetensors + config.json)."""
     from jax3dc.model import params as hf_params
 
-    hf_params.save_pretrained(state.merged(), directory)
+    model = state.merged()
+    hf_params.save_pretrained(model, model.config, directory)
 
 
 def count_params(tree: Any) -> int:
