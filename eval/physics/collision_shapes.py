@@ -16,49 +16,65 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from eval.physics.tolerances import CONCAVITY_RATIO, DECOMPOSITION_DEPTH, HULL_MAX_VERTICES
+from eval.physics.tolerances import CONCAVE_EXCESS_NU3, DECOMPOSITION_DEPTH, HULL_MAX_VERTICES
 
-MAX_PIECES_PER_PART = 64  # many tiny components (screws, text) are merged into one hull beyond this
+MAX_PIECES_PER_PART = 64  # beyond this the part is decomposed as one component (tiny pieces merge)
+MAX_BOXES_PER_COMPONENT = 24  # the voxels of a concave component coarsen until this many boxes cover it
 
 
-def convex_pieces(mesh: trimesh.Trimesh, min_size: float) -> list[np.ndarray]:
+def convex_pieces(mesh: trimesh.Trimesh, min_size: float, scale: float = 1.0) -> list[np.ndarray]:
     """Vertex arrays [k, 3] (k ≤ HULL_MAX_VERTICES) of convex pieces covering ``mesh``.
 
-    ``min_size``: pieces smaller than this in every direction are thickened (so hulls are valid).
+    ``min_size``: pieces thinner than this are thickened (so hulls are valid); ``scale``: mesh
+    units per nu (the concavity threshold is in nu³).
     """
     components = mesh.split(only_watertight=False) if len(mesh.faces) else []
     if not components or len(components) > MAX_PIECES_PER_PART:
         components = [mesh]
-    pieces: list[np.ndarray] = []
-    for component in components:
-        for piece in _split_concave(component, DECOMPOSITION_DEPTH):
-            pieces.append(capped_hull(np.asarray(piece.vertices, dtype=np.float64), min_size))
-    return pieces
+    excess = CONCAVE_EXCESS_NU3 * scale ** 3
+    pieces = [piece for component in components for piece in _split_concave(component, DECOMPOSITION_DEPTH, excess)]
+    if len(pieces) > MAX_PIECES_PER_PART:
+        pieces = _split_concave(mesh, DECOMPOSITION_DEPTH, excess)
+    return [capped_hull(np.asarray(piece.vertices, dtype=np.float64), min_size) for piece in pieces]
 
 
-def _split_concave(mesh: trimesh.Trimesh, depth: int) -> list[trimesh.Trimesh]:
-    """A closed, clearly concave component becomes the surface points inside each of a few boxes
-    that cover its voxelisation (greedy box merging); others stay whole."""
-    if not mesh.is_volume:
-        return [mesh]
+def _split_concave(mesh: trimesh.Trimesh, depth: int, excess: float) -> list[trimesh.Trimesh]:
+    """A clearly concave component (its hull exceeds its voxelised volume by more than ``excess``)
+    becomes the surface points inside each box of a greedy box cover of its voxels; others stay
+    whole. Closed meshes are voxelised solid, open ones (triangle soups) by their surface."""
     try:
-        if mesh.convex_hull.volume <= CONCAVITY_RATIO * abs(mesh.volume):
-            return [mesh]
+        hull_volume = mesh.convex_hull.volume
     except Exception:  # qhull: flat point set
         return [mesh]
-    pitch = float(np.max(mesh.extents)) / (8 * 2 ** depth)
-    grid = mesh.voxelized(pitch).fill()
-    occupied = np.asarray(grid.matrix, dtype=bool)
+    extent = float(np.max(mesh.extents))
+    pitch = extent / (8 * 2 ** depth)
+    if hull_volume <= excess or len(mesh.faces) == 0:
+        return [mesh]
+    grid, occupied = _voxels(mesh, pitch)
+    if hull_volume - occupied.sum() * pitch ** 3 <= excess:
+        return [mesh]
+    boxes = _boxes(occupied)
+    while len(boxes) > MAX_BOXES_PER_COMPONENT and pitch < extent / 2:  # coarser voxels, fewer pieces
+        pitch *= 2
+        grid, occupied = _voxels(mesh, pitch)
+        boxes = _boxes(occupied)
     points = np.concatenate([mesh.vertices, mesh.sample(20000, seed=0)])
-    # the voxel index of each surface point (points exactly on a wall stay with that wall's voxels)
+    # the voxel index of each surface point (voxel 0's centre is the grid's translation)
     index = np.floor((points - grid.translation) / pitch + 0.5).astype(int)
     index = np.clip(index, 0, np.array(occupied.shape) - 1)
     pieces = []
-    for lo, hi in _boxes(occupied):
+    for lo, hi in boxes:
         inside = np.all((index >= lo) & (index < hi), axis=1)
         if inside.sum() >= 4:
             pieces.append(trimesh.PointCloud(points[inside]))
     return pieces or [mesh]
+
+
+def _voxels(mesh: trimesh.Trimesh, pitch: float):
+    grid = mesh.voxelized(pitch)
+    if mesh.is_volume:
+        grid = grid.fill()
+    return grid, np.asarray(grid.matrix, dtype=bool)
 
 
 def _boxes(occupied: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -82,17 +98,17 @@ def _boxes(occupied: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def capped_hull(points: np.ndarray, min_size: float) -> np.ndarray:
-    """Hull vertices of ``points``, at most HULL_MAX_VERTICES, with every extent ≥ ``min_size``."""
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    thin = (hi - lo) < min_size
-    if thin.any():  # flat piece: thicken it to ``min_size`` so the hull has a volume
-        pad = np.where(thin, min_size / 2, 0.0)
-        points = np.concatenate([points + pad, points - pad])
-    try:
-        vertices = np.asarray(trimesh.convex.convex_hull(points).vertices)
-    except Exception:
-        lo, hi = points.min(axis=0), points.max(axis=0)  # degenerate even after padding: its box
-        vertices = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    """Hull vertices of ``points``, at most HULL_MAX_VERTICES, at least ``min_size`` thick in every
+    principal direction (a flat or thin piece, in any orientation, gets a volume)."""
+    centred = points - points.mean(axis=0)
+    _, _, directions = np.linalg.svd(centred, full_matrices=False)
+    for direction in directions:  # rows: principal directions
+        extent = np.ptp(centred @ direction)
+        if extent < min_size:
+            pad = direction * (min_size - extent) / 2
+            points = np.concatenate([points + pad, points - pad])
+            centred = points - points.mean(axis=0)
+    vertices = np.asarray(trimesh.convex.convex_hull(points).vertices)
     if len(vertices) > HULL_MAX_VERTICES:
         vertices = vertices[_farthest_points(vertices, HULL_MAX_VERTICES)]
     return vertices

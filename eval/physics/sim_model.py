@@ -24,6 +24,7 @@ from jax3dc.structure.schema import Structure
 
 TIMESTEP_S = 0.002
 MIN_PIECE_M = 2e-3  # collision pieces are at least this thick (metres)
+ARENA_MEMORY = "64M"  # room for the contacts of many convex pieces within the proximity margin
 SERVO_OMEGA = 40.0  # natural frequency (rad/s) of the critically damped joint servos
 
 
@@ -36,7 +37,7 @@ class SimOptions:
     actuators: bool = False
     visual: bool = False
     exclude: frozenset[tuple[int, int]] = frozenset()  # part pairs (a < b) never in contact
-    margin_m: float = 0.0  # contacts are reported up to this distance apart (kinematic checks: proximity)
+    margin_m: float = 0.0  # contacts of moving parts are reported up to this distance apart (proximity)
 
 
 @dataclass
@@ -66,7 +67,7 @@ def build_sim_model(structure: Structure, parts: dict[int, trimesh.Trimesh], sca
     """Compile the simulation model. ``pieces`` (from an earlier build) skips the decomposition."""
     export = assemble(structure, parts, scale)
     if pieces is None:
-        pieces = {p.part_id: convex_pieces(p.mesh, MIN_PIECE_M) for p in export}
+        pieces = {p.part_id: convex_pieces(p.mesh, MIN_PIECE_M, scale) for p in export}
     gains = None
     if options.actuators:  # servo gains scale with each joint's effective inertia: compile once without
         bare = _compile(export, pieces, scale, SimOptions(options.floor, options.free_root, False, False, options.exclude, options.margin_m))
@@ -99,6 +100,7 @@ def _servo_gains(model: mujoco.MjModel) -> dict[str, tuple[float, float]]:
 def _mjcf(export: list[ExportPart], pieces, scale: float, options: SimOptions, gains) -> tuple[str, dict[str, bytes]]:
     root = ET.Element("mujoco", model="physics_check")
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
+    ET.SubElement(root, "size", memory=ARENA_MEMORY)
     option = ET.SubElement(root, "option", timestep=str(TIMESTEP_S), integrator="implicitfast")
     ET.SubElement(option, "flag", filterparent="disable")
     asset = ET.SubElement(root, "asset")
@@ -109,7 +111,9 @@ def _mjcf(export: list[ExportPart], pieces, scale: float, options: SimOptions, g
         ET.SubElement(worldbody, "geom", name="floor", type="plane", size="0 0 1", pos=vec([0, 0, lowest]),
                       friction="1 0.005 0.0001")
     bodies: dict[int, ET.Element] = {}
+    moving: dict[int, bool] = {}  # the part moves with some joint (only those need the proximity margin)
     for part in export:
+        moving[part.part_id] = part.joint is not None or (part.parent is not None and moving[part.parent])
         parent = worldbody if part.parent is None else bodies[part.parent]
         body = ET.SubElement(parent, "body", name=part.label, pos=vec(part.offset_m))
         bodies[part.part_id] = body
@@ -124,7 +128,7 @@ def _mjcf(export: list[ExportPart], pieces, scale: float, options: SimOptions, g
             ET.SubElement(body, "geom", name=f"collision_{part.part_id}_{i}", type="mesh", mesh=mesh_name,
                           density=vec([part.props.density_kg_m3]),
                           friction=vec([part.props.friction, 0.005, 0.0001]), group="3",
-                          margin=vec([options.margin_m]))
+                          margin=vec([options.margin_m if moving[part.part_id] else 0.0]))
         if options.visual and part.solid != "box":
             file_name = f"visual_{part.part_id}.obj"
             assets[file_name] = obj_text(part.mesh).encode()

@@ -3,10 +3,10 @@
 Converted to metres with the object's scale when compared with simulator quantities.
 """
 
-PENETRATION_TOL_NU = 0.01  # a contact deeper than this (signed distance < -tol) is interpenetration
-REST_PENETRATION_TOL_NU = 0.01  # same depth, at the rest pose (reported as a rest-pose problem)
-ATTACH_TOL_NU = 0.03  # the pivot lies within this distance of the child AND of its parent
-DETACH_TOL_NU = 0.05  # a moving child farther than this from its parent (all geoms) is detached
+PENETRATION_TOL_NU = 0.025  # a contact deeper than this is interpenetration (voxel pieces are exact to ~pitch/2)
+REST_PENETRATION_TOL_NU = 0.05  # at rest: real meshes interlock at hinges (a bucket handle through its lugs)
+ATTACH_TOL_NU = 0.07  # the pivot lies within this distance of the child AND of its parent
+DETACH_TOL_NU = 0.2  # a moving child farther than this from its parent (all geoms) is detached
 LIMIT_TOL_HINGE_RAD = 0.08  # a hinge limit counts as reached within this angle
 LIMIT_TOL_SLIDE_NU = 0.03  # a slide limit counts as reached within this distance
 GRAVITY_DRIFT_NU = 0.05  # the root may move this far (after settling on the floor) under gravity
@@ -16,5 +16,5 @@ GRAVITY_JOINT_DRIFT = 0.1  # held joints may sag this much (rad for hinges, nu f
 SWEEP_STEPS = 9  # states per joint sweep, both limits included
 RANDOM_COMBINATIONS = 32  # random joint-combination states per object
 HULL_MAX_VERTICES = 32  # vertex cap of each collision hull (MJX's convex collision is per vertex)
-CONCAVITY_RATIO = 1.5  # a closed piece whose hull is this much bigger than it gets split further
+CONCAVE_EXCESS_NU3 = 2e-4  # a closed piece whose hull exceeds its volume by this much is decomposed (a 0.06 nu pocket)
 DECOMPOSITION_DEPTH = 2  # voxel size of a concave component: its largest extent / (8 * 2**depth)

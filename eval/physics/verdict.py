@@ -2,8 +2,8 @@
 
 Reasons are short stable strings: "penetrates parent at rest", "penetrates part P at q=V",
 "detached from parent at q=V", "pivot detached", "limit unreachable: lo|hi", and object-level
-"rest interpenetration: parts A,B", "combination interpenetration: parts A,B",
-"unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
+"rest interpenetration: parts A,B" (fails the object), "combination interpenetration: parts A,B"
+(reported only), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
 """
 
 from __future__ import annotations
@@ -91,7 +91,9 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
     checks["combinations"] = sorted(r for r in found if not _pair_of(r) & {(body_part[a], body_part[b]) for a, b in single})
     del nbody
     joints = {str(p): {"ok": not r, "reasons": r} for p, r in reasons.items()}
-    ok = all(j["ok"] for j in joints.values()) and not checks["rest"] and not checks["combinations"]
+    # combinations are reported, not failed: real objects have dependent joints (a dishwasher rack
+    # slides out only with the door open, folded eyeglass temples cross)
+    ok = all(j["ok"] for j in joints.values()) and not checks["rest"]
     return {"ok": ok, "joints": joints, "checks": checks}
 
 

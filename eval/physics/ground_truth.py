@@ -1,0 +1,83 @@
+"""Ground-truth objects for measuring the checks: procedural factories and imported fixtures.
+
+``false_alarms`` counts flagged joints on correct objects; ``mutation_detection`` counts mutated
+joints flagged with an expected reason, per mutation kind. Mutations that do not change the motion
+(the mutated and the original joint sweep the moved parts through the same poses) are skipped.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterable, Iterator
+
+import numpy as np
+import trimesh
+
+from eval.physics.mutations import Mutation, mutations_of
+from eval.physics.verdict import check_object
+from jax3dc.structure.schema import Structure
+
+
+@dataclass(frozen=True)
+class GroundTruthObject:
+    name: str
+    structure: Structure
+    parts: dict[int, trimesh.Trimesh]
+    scale: float
+
+
+def factory_objects(categories: Iterable[str], seeds: Iterable[int]) -> Iterator[GroundTruthObject]:
+    from data_pipeline.factories import generate_object
+    for category in categories:
+        for seed in seeds:
+            obj = generate_object(category, seed)
+            yield GroundTruthObject(obj.object_id, obj.structure, obj.parts, obj.scale_m_per_nu)
+
+
+def imported_objects(directories: Iterable[Path]) -> Iterator[GroundTruthObject]:
+    from data_pipeline.importers.source import import_object
+    for directory in directories:
+        obj = import_object(Path(directory))
+        yield GroundTruthObject(Path(directory).name, obj.structure, obj.parts, float(obj.meta.get("scale", 1.0)))
+
+
+def false_alarms(objects: Iterable[GroundTruthObject], on_result: Callable | None = None) -> dict:
+    joints = flagged = 0
+    reasons: Counter = Counter()
+    for obj in objects:
+        verdict = check_object(obj.structure, obj.parts, obj.scale)
+        for part, joint in verdict["joints"].items():
+            joints += 1
+            flagged += not joint["ok"]
+            reasons.update(r.split(" at ")[0] for r in joint["reasons"])
+        if on_result:
+            on_result(obj, verdict)
+    return {"joints": joints, "flagged": flagged, "rate": flagged / max(joints, 1), "reasons": dict(reasons)}
+
+
+def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, trimesh.Trimesh]) -> bool:
+    """Whether the mutated joint moves the part's vertices differently at some state of either range."""
+    from eval.physics.kinematics import subtree_vertices_at
+    a = subtree_vertices_at(original, parts, mutation.part)
+    b = subtree_vertices_at(mutation.structure, parts, mutation.part)
+    return a.shape != b.shape or not np.allclose(a, b, atol=1e-3)
+
+
+def mutation_detection(objects: Iterable[GroundTruthObject], on_result: Callable | None = None) -> dict:
+    per_kind: dict[str, Counter] = {}
+    for obj in objects:
+        for mutation in mutations_of(obj.structure, obj.parts):
+            counts = per_kind.setdefault(mutation.kind, Counter())
+            if not changes_motion(obj.structure, mutation, obj.parts):
+                counts["skipped (same motion)"] += 1
+                continue
+            verdict = check_object(mutation.structure, obj.parts, obj.scale)
+            reasons = verdict["joints"][str(mutation.part)]["reasons"]
+            counts["total"] += 1
+            counts["flagged"] += bool(reasons)
+            counts["right reason"] += any(r.startswith(e) for r in reasons for e in mutation.expected)
+            if on_result:
+                on_result(obj, mutation, verdict)
+    return {kind: dict(c) for kind, c in per_kind.items()}
