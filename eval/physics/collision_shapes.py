@@ -18,8 +18,8 @@ import trimesh
 
 from eval.physics.tolerances import CONCAVE_EXCESS_NU3, DECOMPOSITION_DEPTH, HULL_MAX_VERTICES
 
-MAX_PIECES_PER_PART = 64  # beyond this the part is decomposed as one component (tiny pieces merge)
-MAX_BOXES_PER_COMPONENT = 24  # the voxels of a concave component coarsen until this many boxes cover it
+MAX_PIECES_PER_PART = 128  # beyond this the part is decomposed as one component (tiny pieces merge)
+MAX_BOXES_PER_COMPONENT = 128  # the voxels of a concave component coarsen until this many boxes cover it
 
 
 def convex_pieces(mesh: trimesh.Trimesh, min_size: float, scale: float = 1.0) -> list[np.ndarray]:
@@ -51,7 +51,9 @@ def _split_concave(mesh: trimesh.Trimesh, depth: int, excess: float) -> list[tri
     if hull_volume <= excess or len(mesh.faces) == 0:
         return [mesh]
     grid, occupied = _voxels(mesh, pitch)
-    if hull_volume - occupied.sum() * pitch ** 3 <= excess:
+    # a closed mesh knows its volume; an open one only its (thickened) voxel count
+    volume = abs(mesh.volume) if mesh.is_volume else occupied.sum() * pitch ** 3
+    if hull_volume - volume <= excess:
         return [mesh]
     boxes = _boxes(occupied)
     while len(boxes) > MAX_BOXES_PER_COMPONENT and pitch < extent / 2:  # coarser voxels, fewer pieces

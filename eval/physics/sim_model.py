@@ -25,7 +25,7 @@ from jax3dc.structure.schema import Structure
 TIMESTEP_S = 0.002
 MIN_PIECE_M = 2e-3  # collision pieces are at least this thick (metres)
 ARENA_MEMORY = "64M"  # room for the contacts of many convex pieces within the proximity margin
-SERVO_OMEGA = 40.0  # natural frequency (rad/s) of the critically damped joint servos
+SERVO_OMEGA = 60.0  # natural frequency (rad/s) of the critically damped joint servos
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,8 @@ class SimOptions:
     actuators: bool = False
     visual: bool = False
     exclude: frozenset[tuple[int, int]] = frozenset()  # part pairs (a < b) never in contact
+    frictionless: bool = False  # condim 1: only collisions block motion (reachability)
+    floor_contacts_only: bool = False  # parts touch the floor but not each other (gravity test)
     margin_m: float = 0.0  # contacts of moving parts are reported up to this distance apart (proximity)
 
 
@@ -109,8 +111,11 @@ def _mjcf(export: list[ExportPart], pieces, scale: float, options: SimOptions, g
     if options.floor:
         lowest = min(float((p.mesh.vertices[:, 2] + p.frame_nu[2] * scale).min()) for p in export)
         ET.SubElement(worldbody, "geom", name="floor", type="plane", size="0 0 1", pos=vec([0, 0, lowest]),
-                      friction="1 0.005 0.0001")
+                      friction="1 0.005 0.0001", contype="1", conaffinity="2" if options.floor_contacts_only else "1")
     bodies: dict[int, ET.Element] = {}
+    contact_bits = {"condim": "1"} if options.frictionless else {}
+    if options.floor_contacts_only:  # (contype & other's conaffinity): part-part 2&1 = 0, part-floor 2&2
+        contact_bits.update(contype="2", conaffinity="1")
     moving: dict[int, bool] = {}  # the part moves with some joint (only those need the proximity margin)
     for part in export:
         moving[part.part_id] = part.joint is not None or (part.parent is not None and moving[part.parent])
@@ -128,7 +133,7 @@ def _mjcf(export: list[ExportPart], pieces, scale: float, options: SimOptions, g
             ET.SubElement(body, "geom", name=f"collision_{part.part_id}_{i}", type="mesh", mesh=mesh_name,
                           density=vec([part.props.density_kg_m3]),
                           friction=vec([part.props.friction, 0.005, 0.0001]), group="3",
-                          margin=vec([options.margin_m if moving[part.part_id] else 0.0]))
+                          margin=vec([options.margin_m if moving[part.part_id] else 0.0]), **contact_bits)
         if options.visual and part.solid != "box":
             file_name = f"visual_{part.part_id}.obj"
             assets[file_name] = obj_text(part.mesh).encode()

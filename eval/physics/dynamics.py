@@ -1,0 +1,94 @@
+"""The two checks that need dynamics: limit reachability and stability under gravity.
+
+Both are short rollouts from rest through ``mujoco.rollout`` (C, threaded). For reachability,
+contacts are frictionless and only the part pairs that collide along the kinematic sweeps stay in
+contact (``tolerated_pairs``), so a joint stops at a collision the sweep found, at its own limit,
+or where its servo loses against gravity.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import trimesh
+
+from eval.physics import cpu_backend
+from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
+from eval.physics.tolerances import (GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT, GRAVITY_TILT_RAD, LIMIT_TOL_HINGE_RAD,
+                                     LIMIT_TOL_SLIDE_NU)
+from jax3dc.structure.schema import Structure
+
+SETTLE_STEPS = 400  # 0.8 s at the model's 2 ms step
+
+
+def reachability(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float,
+                 exclude: frozenset[tuple[int, int]], pieces) -> dict[int, list[str]]:
+    """Per jointed part: "limit unreachable: lo|hi (stops at q=V)" when its servo cannot get there."""
+    sim = build_sim_model(structure, parts, scale, SimOptions(actuators=True, exclude=exclude, frictionless=True), pieces)
+    rest = sim.model.qpos0
+    targets, rows = [], []
+    for k in range(len(sim.joint_parts)):
+        for end in (0, 1):
+            ctrl = rest[sim.joint_qpos].copy()
+            ctrl[k] = sim.joint_range[k, end]
+            targets.append(ctrl)
+            rows.append((k, end))
+    if not rows:
+        return {}
+    final = cpu_backend.final_qpos(sim.model, np.repeat(rest[None], len(rows), axis=0), np.asarray(targets), SETTLE_STEPS)
+    reasons: dict[int, list[str]] = {p: [] for p in sim.joint_parts}
+    for (k, end), q in zip(rows, final):
+        unit = 1.0 if sim.joint_type[k] == "hinge" else scale
+        tol = LIMIT_TOL_HINGE_RAD if sim.joint_type[k] == "hinge" else LIMIT_TOL_SLIDE_NU * scale
+        reached = q[sim.joint_qpos[k]]
+        if abs(reached - sim.joint_range[k, end]) > tol:
+            reasons[sim.joint_parts[k]].append(
+                f"limit unreachable: {('lo', 'hi')[end]} (stops at q={reached / unit:.3f})")
+    return reasons
+
+
+def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, pieces) -> tuple[list[str], dict[int, list[str]]]:
+    """Object-level "unstable under gravity ..." and per-joint "sags under gravity" on a floor, joints held.
+
+    Parts touch only the floor here: the object's own contacts are the kinematic checks' concern.
+    """
+    sim = build_sim_model(structure, parts, scale, SimOptions(floor=True, free_root=True, actuators=True,
+                                                              floor_contacts_only=True), pieces)
+    model = sim.model
+    rest = model.qpos0.copy()
+    final = cpu_backend.final_qpos(model, rest[None], rest[sim.joint_qpos][None], SETTLE_STEPS)[0]
+    problems: list[str] = []
+    for j in range(model.njnt):
+        if int(model.jnt_type[j]) != int(mujoco.mjtJoint.mjJNT_FREE):
+            continue
+        adr = model.jnt_qposadr[j]
+        drift = float(np.linalg.norm(final[adr:adr + 3] - rest[adr:adr + 3])) / scale
+        tilt = _tilt(final[adr + 3:adr + 7])
+        if not np.isfinite(drift) or drift > GRAVITY_DRIFT_NU or tilt > GRAVITY_TILT_RAD:
+            problems.append(f"unstable under gravity: root moved {drift:.3f} nu, tilted {tilt:.2f} rad")
+    sag: dict[int, list[str]] = {p: [] for p in sim.joint_parts}
+    for k, part in enumerate(sim.joint_parts):
+        unit = 1.0 if sim.joint_type[k] == "hinge" else scale
+        moved = abs(final[sim.joint_qpos[k]] - rest[sim.joint_qpos[k]]) / unit
+        if not np.isfinite(moved) or moved > GRAVITY_JOINT_DRIFT:
+            sag[part].append(f"sags under gravity by {moved:.3f}")
+    return problems, sag
+
+
+def _tilt(quat: np.ndarray) -> float:
+    """Angle between the body's z axis and the world's (quaternion w, x, y, z)."""
+    w, x, y, z = quat / np.linalg.norm(quat)
+    zz = 1 - 2 * (x * x + y * y)
+    return float(np.arccos(np.clip(zz, -1.0, 1.0)))
+
+
+def tolerated_pairs(sim: SimModel, distances: np.ndarray, depth_m: float) -> frozenset[tuple[int, int]]:
+    """Part pairs that never interpenetrate deeper than ``depth_m`` over the kinematic states, or
+    already do at rest: left out of the reachability model, so that a servo is stopped only by a
+    collision that the kinematic checks also report (or by gravity and its own limits)."""
+    body_part = {b: p for p, b in sim.part_body.items()}
+    deep_later = (distances[1:] < -depth_m).any(axis=0) if len(distances) > 1 else np.zeros_like(distances[0], bool)
+    blocking = deep_later & ~(distances[0] < -depth_m)
+    ids = sorted(body_part)
+    return frozenset((min(body_part[a], body_part[b]), max(body_part[a], body_part[b]))
+                     for i, a in enumerate(ids) for b in ids[i + 1:] if not blocking[a, b])
