@@ -21,6 +21,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "jax3dc.export.cli",
     "eval.cli",
     "train.cli",
+    "eval.demo_cli",
 )
 
 
