@@ -22,6 +22,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "eval.cli",
     "train.cli",
     "eval.demo_cli",
+    "eval.physics.cli",
 )
 
 

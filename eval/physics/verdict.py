@@ -27,6 +27,12 @@ def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
     ``backend``: "c" (C MuJoCo) or "mjx" for the kinematic checks; ``dynamics`` adds limit
     reachability and the gravity test (C rollouts).
     """
+    return check_object_with_curves(structure, parts, scale, backend, dynamics)[0]
+
+
+def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
+                             backend: str = "c", dynamics: bool = True) -> tuple[dict[str, Any], dict[int, Any]]:
+    """``check_object`` and, per jointed part, (joint values, deepest penetration in nu) over its sweep."""
     with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
         kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale))
     states = check_states(kinematic)
@@ -41,7 +47,22 @@ def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
             joint["reasons"] += extra.get(int(part), []) + sag.get(int(part), [])
             joint["ok"] = not joint["reasons"]
         verdict["ok"] = verdict["ok"] and not problems and all(j["ok"] for j in verdict["joints"].values())
-    return verdict
+    return verdict, penetration_curves(kinematic, states, distances)
+
+
+def penetration_curves(sim: SimModel, states: StateBatch, distances: np.ndarray) -> dict[int, Any]:
+    """Per jointed part: joint values (rad / nu) and the deepest contact (nu, ≥ 0) between the parts
+    it moves and the rest of the object, in sweep order."""
+    group = sim.group_of_body
+    curves = {}
+    for k, part in enumerate(sim.joint_parts):
+        rows = np.nonzero(states.joint == k)[0]
+        moved = sim.moved_by[k]
+        across = (moved[:, None] ^ moved[None, :]) & (group[:, None] != group[None, :])
+        depth = [max(0.0, float(-np.min(np.where(across, distances[s], np.inf), initial=0.0))) / sim.scale for s in rows]
+        unit = 1.0 if sim.joint_type[k] == "hinge" else sim.scale
+        curves[part] = (states.value[rows] / unit, np.asarray(depth))
+    return curves
 
 
 def kinematic_distances(sim: SimModel, qpos: np.ndarray, backend: str) -> np.ndarray:

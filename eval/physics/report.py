@@ -1,0 +1,55 @@
+"""The report folder of ``jax3dc physics sweep``: verdict lines, a summary, plots and an index."""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from jax3dc.errors import InputFileError
+
+
+def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], out: Path) -> dict[str, Any]:
+    """Write verdicts.jsonl, summary.json, plots/<object>.png and index.md; return the summary."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    try:
+        (out / "plots").mkdir(parents=True, exist_ok=True)
+        joints = [j for r in results for j in r["verdict"]["joints"].values()]
+        reasons = Counter(reason.split(" at q=")[0].split(" (")[0] for j in joints for reason in j["reasons"])
+        summary = {
+            "objects": len(results), "objects_ok": sum(r["verdict"]["ok"] for r in results),
+            "joints": len(joints), "joints_ok": sum(j["ok"] for j in joints),
+            "reasons": dict(reasons.most_common()), "skipped": len(skipped),
+        }
+        with (out / "verdicts.jsonl").open("w", encoding="utf-8") as f:
+            for r in results:
+                f.write(json.dumps({"object": r["object"], "category": r["category"], **r["verdict"]}) + "\n")
+            for s in skipped:
+                f.write(json.dumps({"object": s["object"], "skipped": s["why"]}) + "\n")
+        (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
+        lines = ["# Physics sweep", "", f"{summary['objects_ok']} / {summary['objects']} objects pass, "
+                 f"{summary['joints_ok']} / {summary['joints']} joints pass, {len(skipped)} skipped.", "",
+                 "| object | joint | ok | reasons |", "|---|---|---|---|"]
+        for r in results:
+            for part, j in r["verdict"]["joints"].items():
+                lines.append(f"| {r['object']} | {part} | {'yes' if j['ok'] else 'no'} | {'; '.join(j['reasons'])} |")
+            if r["curves"]:
+                fig, ax = plt.subplots(figsize=(5, 3))
+                for part, (q, depth) in r["curves"].items():
+                    ax.plot(q, depth, marker=".", label=f"joint of part {part}")
+                ax.set_xlabel("joint value (rad or nu)")
+                ax.set_ylabel("deepest penetration (nu)")
+                ax.set_title(r["object"])
+                ax.legend(fontsize=7)
+                fig.tight_layout()
+                fig.savefig(out / "plots" / f"{r['object']}.png", dpi=80)
+                plt.close(fig)
+                lines.append(f"\n![{r['object']}](plots/{r['object']}.png)\n")
+        (out / "index.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    except OSError as e:
+        raise InputFileError(out, f"cannot write the report: {e.strerror or e}") from None
+    return summary
