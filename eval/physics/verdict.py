@@ -36,8 +36,13 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
     with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
         kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale))
     states = check_states(kinematic)
-    distances = kinematic_distances(kinematic, states.qpos, backend)
-    verdict = verdict_from(structure, parts, kinematic, states, distances)
+    proximity = cpu_backend.pair_distances(kinematic.model, states.qpos)
+    distances = proximity
+    if backend == "mjx":  # MJX has no mesh-mesh margin: it gives penetration, C keeps the proximity check
+        from eval.physics.mjx_backend import mjx_pair_distances
+        bare = build_sim_model(structure, parts, scale, SimOptions(), kinematic.pieces)
+        distances = mjx_pair_distances(bare.model, states.qpos)
+    verdict = verdict_from(structure, parts, kinematic, states, distances, proximity)
     if dynamics:
         exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale)
         extra = reachability(structure, parts, scale, exclude, kinematic.pieces)
@@ -65,16 +70,11 @@ def penetration_curves(sim: SimModel, states: StateBatch, distances: np.ndarray)
     return curves
 
 
-def kinematic_distances(sim: SimModel, qpos: np.ndarray, backend: str) -> np.ndarray:
-    """[S, nbody, nbody] smallest contact distance per body pair (metres), from C MuJoCo or MJX."""
-    if backend == "mjx":
-        from eval.physics.mjx_backend import mjx_pair_distances
-        return mjx_pair_distances(sim.model, qpos)
-    return cpu_backend.pair_distances(sim.model, qpos)
-
-
 def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: SimModel, states: StateBatch,
-                 distances: np.ndarray) -> dict[str, Any]:
+                 distances: np.ndarray, proximity: np.ndarray | None = None) -> dict[str, Any]:
+    """Kinematic verdict from [S, nbody, nbody] contact distances (penetration) and proximity
+    distances (contacts within the detachment margin; the same array on the C path)."""
+    proximity = distances if proximity is None else proximity
     scale = sim.scale
     body_part = {b: p for p, b in sim.part_body.items()}
     group = sim.group_of_body
@@ -84,7 +84,9 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
     checks: dict[str, Any] = {}
     checks["rest"] = sorted({f"rest interpenetration: parts {min(body_part[a], body_part[b])},{max(body_part[a], body_part[b])}"
                              for a, b in zip(*np.nonzero(rest_pen)) if a < b})
-    pen = (distances < -PENETRATION_TOL_NU * scale) & distinct[None] & ~rest_pen[None]
+    # pairs already deeper than the sweep tolerance at rest are the rest check's business (at its own tolerance)
+    rest_deep = distances[0] < -PENETRATION_TOL_NU * scale
+    pen = (distances < -PENETRATION_TOL_NU * scale) & distinct[None] & ~rest_deep[None]
     for k, part in enumerate(sim.joint_parts):
         unit = 1.0 if sim.joint_type[k] == "hinge" else scale
         moved = sim.moved_by[k]
@@ -105,7 +107,7 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
             reasons[part].append(hit)
         parent_group = group == group[parent]
         for s in rows:
-            near = distances[s][np.ix_(moved, parent_group)]
+            near = proximity[s][np.ix_(moved, parent_group)]
             if not np.any(near < DETACH_TOL_NU * scale):
                 reasons[part].append(f"detached from parent at q={states.value[s] / unit:.3f}")
                 break
