@@ -58,3 +58,27 @@ def final_qpos(model: mujoco.MjModel, qpos: np.ndarray, ctrl: np.ndarray, nstep:
         state, _ = r.rollout(model, datas, init, controls, nstep=nstep)
     # the full-physics state is [time, qpos, qvel, act, ...]: qpos follows the time entry
     return state[:, -1, 1:1 + model.nq]
+
+
+_WORKER_MODEL: mujoco.MjModel | None = None
+
+
+def _init_worker(xml: str, assets: dict[str, bytes]) -> None:
+    global _WORKER_MODEL
+    _WORKER_MODEL = mujoco.MjModel.from_xml_string(xml, assets)
+
+
+def _worker_chunk(qpos: np.ndarray) -> np.ndarray:
+    return pair_distances(_WORKER_MODEL, qpos)
+
+
+def pair_distances_processes(xml: str, assets: dict[str, bytes], qpos: np.ndarray,
+                             workers: int | None = None) -> np.ndarray:
+    """``pair_distances`` over worker processes, one model each: the per-state C calls hold the GIL,
+    so threads do not scale and processes are the fastest C path on a many-core machine."""
+    import multiprocessing as mp
+
+    workers = workers or os.cpu_count() or 1
+    chunks = np.array_split(qpos, workers * 4)
+    with mp.get_context("fork").Pool(workers, initializer=_init_worker, initargs=(xml, assets)) as pool:
+        return np.concatenate(pool.map(_worker_chunk, chunks))
