@@ -1,0 +1,83 @@
+"""``jax3dc physics check`` end to end, and MJX against C MuJoCo on the same joint states."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+from jax3dc.cli import main
+from jax3dc.geometry.parts import save_parts
+from jax3dc.structure import parse_structure, to_json
+
+warnings.filterwarnings("ignore", category=RuntimeWarning)
+
+
+def _box(extents, centre):
+    mesh = trimesh.creation.box(extents=extents)
+    mesh.apply_translation(centre)
+    return mesh
+
+
+def _lid_box():
+    """A base block and a lid hinged on its back edge: small enough for a quick MJX compile."""
+    parts = {1: _box([1.0, 0.6, 0.4], [0, 0, -0.2]), 2: _box([1.0, 0.6, 0.05], [0, 0, 0.025])}
+    doc = {"materials": {"0": {"family": "Wood", "desc": "pine"}},
+           "nodes": {"1": {"parent": None, "material": 0},
+                     "2": {"parent": 1, "material": 0,
+                           "joint": {"type": "hinge", "axis": [-1, 0, 0], "pivot": [0, 0.3, 0], "range": [0, 1.8]}}},
+           "relations": []}
+    return parse_structure(doc, part_ids=parts.keys()), parts
+
+
+def test_cli_check_writes_verdict(tmp_path, capsys):
+    structure, parts = _lid_box()
+    save_parts(parts, tmp_path / "parts")
+    (tmp_path / "o.json").write_text(to_json(structure))
+    rc = main(["physics", "check", str(tmp_path / "o.json"), "--parts", str(tmp_path / "parts"),
+               "--scale", "0.5", "--out", str(tmp_path / "v.json")])
+    assert rc == 0
+    verdict = json.loads((tmp_path / "v.json").read_text())
+    assert verdict == json.loads(capsys.readouterr().out)
+    assert verdict["ok"] and verdict["joints"]["2"] == {"ok": True, "reasons": []}
+    # a lid hinged the wrong way swings into the base: still exit 0, the verdict says why
+    flipped = to_json(structure).replace('"axis":[-1.0,0.0,0.0]', '"axis":[1.0,0.0,0.0]')
+    assert flipped != to_json(structure)
+    (tmp_path / "bad.json").write_text(flipped)
+    assert main(["physics", "check", str(tmp_path / "bad.json"), "--parts", str(tmp_path / "parts")]) == 0
+    reasons = json.loads(capsys.readouterr().out)["joints"]["2"]["reasons"]
+    assert any(r.startswith("penetrates part 1") for r in reasons), reasons
+
+
+def test_cli_check_rejects_unusable_input(tmp_path, capsys):
+    structure, parts = _lid_box()
+    (tmp_path / "o.json").write_text(to_json(structure))
+    assert main(["physics", "check", str(tmp_path / "o.json"), "--parts", str(tmp_path / "missing")]) == 1
+    save_parts({1: parts[1]}, tmp_path / "one")  # node 2 has no mesh
+    assert main(["physics", "check", str(tmp_path / "o.json"), "--parts", str(tmp_path / "one")]) == 1
+    save_parts(parts, tmp_path / "parts")
+    assert main(["physics", "check", str(tmp_path / "o.json"), "--parts", str(tmp_path / "parts"), "--scale", "-1"]) == 1
+
+
+@pytest.mark.slow
+def test_mjx_and_c_give_the_same_penetration_verdicts():
+    from eval.physics.cpu_backend import pair_distances
+    from eval.physics.mjx_backend import mjx_pair_distances
+    from eval.physics.sim_model import SimOptions, build_sim_model
+    from eval.physics.tolerances import PENETRATION_TOL_NU
+
+    structure, parts = _lid_box()
+    sim = build_sim_model(structure, parts, 0.5, SimOptions())
+    rng = np.random.default_rng(0)
+    qpos = rng.uniform(-1.8, 1.8, size=(48, sim.model.nq))  # negative angles swing the lid into the base
+    c = pair_distances(sim.model, qpos)
+    g = mjx_pair_distances(sim.model, qpos)
+    tol = PENETRATION_TOL_NU * 0.5
+    pen_c, pen_g = (c < -tol).any(axis=(1, 2)), (g < -tol).any(axis=(1, 2))
+    assert pen_c.any() and not pen_c.all()
+    assert np.array_equal(pen_c, pen_g)
+    both = np.isfinite(c) & np.isfinite(g) & (c < -tol)
+    np.testing.assert_allclose(g[both], c[both], atol=2e-3 * 0.5 + 0.01 * np.abs(c[both]).max())
