@@ -81,3 +81,29 @@ def test_mjx_and_c_give_the_same_penetration_verdicts():
     assert np.array_equal(pen_c, pen_g)
     both = np.isfinite(c) & np.isfinite(g) & (c < -tol)
     np.testing.assert_allclose(g[both], c[both], atol=2e-3 * 0.5 + 0.01 * np.abs(c[both]).max())
+
+
+def test_cli_sweep_writes_report(tmp_path):
+    from data_pipeline.factories import generate_object
+    from data_pipeline.record import Record
+    from data_pipeline.shards import save_manifest, write_shard
+
+    records = []
+    for category in ("microwave", "laptop"):
+        obj = generate_object(category, 0)
+        meta = {"category": category, "object_id": obj.object_id, "view": 0, "scale": obj.scale_m_per_nu,
+                "moved_joint": None, "augmentation": None}
+        records.append(Record(f"{category}/{obj.object_id}/0", b"", b"", "", to_json(obj.structure),
+                              obj.program_text, meta))
+    records.append(Record("imported/x/0", b"", b"", "", records[0].target, None,
+                          {"object_id": "imported_x", "view": 0}))
+    count, digest = write_shard(tmp_path / "train-00000.array_record", records)
+    save_manifest(tmp_path, {"shards": {"train-00000.array_record": {"records": count, "sha256": digest}}})
+    out = tmp_path / "report"
+    assert main(["physics", "sweep", str(tmp_path), "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["objects"] == 2 and summary["skipped"] == 1 and summary["joints"] >= 2
+    lines = [json.loads(line) for line in (out / "verdicts.jsonl").read_text().splitlines()]
+    assert {line["object"] for line in lines} == {"microwave_000000", "laptop_000000", "imported_x"}
+    assert (out / "plots" / "microwave_000000.png").stat().st_size > 0
+    assert "| microwave_000000 |" in (out / "index.md").read_text()
