@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from jax3dc.cli import command_group
+
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "data_pipeline.convert_cli",
     "data_pipeline.build_cli",
@@ -16,18 +18,11 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "data",
+    group = command_group(
+        subparsers, "data",
         help="convert, build and inspect datasets",
         description="Dataset commands: convert source objects (URDF, MJCF) into structure + part "
         "meshes, and more. Run `jax3dc data SUBCOMMAND --help` for each.",
     )
-    group = parser.add_subparsers(dest="data_command", metavar="SUBCOMMAND")
     for name in SUBCOMMAND_MODULES:
         importlib.import_module(name).register(group)
-
-    def usage(_args: argparse.Namespace) -> int:
-        parser.print_help()
-        return 2
-
-    parser.set_defaults(func=usage)

@@ -12,6 +12,7 @@ import json
 from pathlib import Path
 from typing import Any, Iterable
 
+from jax3dc.cli import command_group
 from jax3dc.errors import InputFileError
 
 SUBCOMMAND_MODULES: tuple[str, ...] = ("eval.run",)
@@ -105,12 +106,11 @@ _LINE_FORMATS = (
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "eval",
+    group = command_group(
+        subparsers, "eval",
         help="score predicted structures (paper Tables 1 and 2) and baselines",
         description="Evaluation commands. Run `jax3dc eval SUBCOMMAND --help` for each.",
     )
-    group = parser.add_subparsers(dest="eval_command", metavar="SUBCOMMAND")
 
     metrics = group.add_parser(
         "metrics",
@@ -140,9 +140,3 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
     for name in SUBCOMMAND_MODULES:
         importlib.import_module(name).register(group)
-
-    def usage(_args: argparse.Namespace) -> int:
-        parser.print_help()
-        return 2
-
-    parser.set_defaults(func=usage)

@@ -26,6 +26,19 @@ COMMAND_MODULES: tuple[str, ...] = (
 )
 
 
+def command_group(subparsers: argparse._SubParsersAction, name: str, **kwargs) -> argparse._SubParsersAction:
+    """Adds a command that only holds subcommands and returns their subparsers; given alone
+    (``jax3dc NAME``) it prints its help and exits 2."""
+    parser = subparsers.add_parser(name, **kwargs)
+
+    def usage(_args: argparse.Namespace) -> int:
+        parser.print_help()
+        return 2
+
+    parser.set_defaults(func=usage)
+    return parser.add_subparsers(dest=f"{name}_command", metavar="SUBCOMMAND")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="jax3dc",

@@ -12,6 +12,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from jax3dc.cli import command_group
 from jax3dc.errors import InputFileError
 
 VERDICT_HELP = (
@@ -24,9 +25,8 @@ VERDICT_HELP = (
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    group = subparsers.add_parser("physics", help="physics plausibility checks of an articulated structure",
-                                  description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = group.add_subparsers(dest="physics_command", metavar="SUBCOMMAND")
+    sub = command_group(subparsers, "physics", help="physics plausibility checks of an articulated structure",
+                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     check = sub.add_parser(
         "check", help="check one structure with its part meshes",
         description="Build a simulation model of STRUCTURE.json with the part meshes in --parts, run the "
@@ -50,7 +50,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     sweep.add_argument("--out", type=Path, default=Path("physics_report"), help="report folder (default: %(default)s)")
     sweep.add_argument("--limit", type=int, default=None, help="check at most this many objects")
     sweep.set_defaults(func=run_sweep)
-    group.set_defaults(func=lambda args: (group.print_help(), 2)[1])
 
 
 def _scale_beside(structure_path: Path) -> float:

@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from jax3dc.cli import command_group
 from jax3dc.errors import InputFileError
 from jax3dc.program.blender import to_blender_script
 from jax3dc.program.interpreter import DEFAULT_MAX_SECONDS, DEFAULT_MAX_TRIANGLES, Budget, run_program
@@ -62,11 +63,10 @@ def _reference(_args: argparse.Namespace) -> int:
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser(
-        "program", help="check, run and export part programs",
+    group = command_group(
+        subparsers, "program", help="check, run and export part programs",
         description="Part programs describe an object part by part with predefined shape functions "
                     "(see `jax3dc program reference`). They are interpreted, never executed as Python.")
-    group = parser.add_subparsers(dest="program_command", metavar="SUBCOMMAND")
 
     run = group.add_parser(
         "run", help="run a program: list its parts, optionally write one mesh per part",
@@ -92,9 +92,3 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     ref = group.add_parser("reference", help="print the language reference",
                            description="Print every predefined function with its arguments.")
     ref.set_defaults(func=_reference)
-
-    def usage(_args: argparse.Namespace) -> int:
-        parser.print_help()
-        return 2
-
-    parser.set_defaults(func=usage)
