@@ -32,19 +32,9 @@ from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.random_weights import build_random
 from jax3dc.sharding import make_mesh, model_shardings
+from train.metrics_log import PEAK_FLOPS, FlopsModel
 
-PEAK_DENSE_BF16 = 989e12
-PEAK_MEASURED_BF16 = 790e12
-
-
-def step_flops(cfg: Qwen3VLConfig, rows: int, length: int, patches: int, n_vis: int) -> float:
-    """hf_peer.py's count: 6·(decoder + lm_head params)·tokens + causal attention, + frozen ViT fwd."""
-    t = cfg.text
-    layer = (t.hidden_size * t.head_dim * (t.num_attention_heads * 2 + t.num_key_value_heads * 2)
-             + 3 * t.hidden_size * t.intermediate_size)
-    per_token = (6 * (t.num_hidden_layers * layer + t.hidden_size * t.vocab_size)
-                 + 6 * t.num_hidden_layers * length * t.num_attention_heads * t.head_dim)
-    return per_token * rows * length + 2 * n_vis * patches * rows
+PEAK_MEASURED_BF16 = 790e12  # the bf16 matmul rate measured on these GPUs (hf_peer.py's denominator)
 
 
 def run_layout(cfg: Qwen3VLConfig, layout: tuple[int, int, int], args) -> dict:
@@ -86,7 +76,7 @@ def run_layout(cfg: Qwen3VLConfig, layout: tuple[int, int, int], args) -> dict:
             decoder, opt_state, value = step(decoder, opt_state, rest, ids, pixels, grid)
         jax.block_until_ready(value)
         dt = (time.perf_counter() - t0) / args.steps
-    flops = step_flops(cfg, rows, args.seq, patches, n_vis)
+    flops = FlopsModel.from_model_config(cfg, n_vis, patches).step_flops(rows, args.seq)
     peaks = [dev.memory_stats().get("peak_bytes_in_use") for dev in mesh.devices.flat
              if dev.memory_stats()] if mesh.devices.flat[0].platform == "gpu" else []
     tokens = rows * args.seq
@@ -94,7 +84,7 @@ def run_layout(cfg: Qwen3VLConfig, layout: tuple[int, int, int], args) -> dict:
             "remat": args.remat, "impl": args.impl, "loss": float(value), "compile_s": round(compile_s, 1),
             "step_s": round(dt, 4), "tokens_per_s": round(tokens / dt),
             "tokens_per_s_per_device": round(tokens / dt / n),
-            "mfu_vs_989": round(flops / dt / n / PEAK_DENSE_BF16, 3),
+            "mfu_vs_989": round(flops / dt / n / PEAK_FLOPS["H100"], 3),
             "mfu_vs_790": round(flops / dt / n / PEAK_MEASURED_BF16, 3),
             "peak_gib_per_device": round(max(peaks) / 2**30, 1) if peaks else None}
 
