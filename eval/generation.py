@@ -19,14 +19,11 @@ import re
 import sys
 import time
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Sequence
 
-import jax
 import jax.numpy as jnp
 import numpy as np
-from flax import nnx
 from PIL import Image
 from tqdm import tqdm
 
@@ -35,7 +32,7 @@ from data_pipeline.shards import SHARD_SUFFIX, read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.model.chat import encode_chat
-from jax3dc.model.generate import GenerationConfig, Prefilled, cache_capacity, decode, left_pad
+from jax3dc.model.generate import GenerationConfig, decode, left_pad, prefill
 from jax3dc.model.params import load_pretrained
 from jax3dc.model.processor import ImageProcessorConfig, preprocess_images, smart_resize
 from jax3dc.model.tokenizer import load_tokenizer
@@ -201,25 +198,12 @@ class Generator:
         pixels = np.concatenate([x.pixel_values for x in processed])
         grid = np.concatenate([x.image_grid_thw for x in processed])
         window = int(np.prod(grid, axis=1).max())
-        prefilled = _jit_prefill(self.model, ids, mask, pixels, grid, cache_capacity(ids.shape[1], max_new_tokens), window)
+        prefilled = prefill(self.model, ids, mask, pixels, grid, max_new_tokens, vision_window=window)
         config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext)
         out = decode(self.model, prefilled, config)
         tokens, lengths = np.asarray(out.tokens), np.asarray(out.lengths)
         return [(self.tokenizer.decode(tokens[i, :lengths[i]].tolist()), int(lengths[i]),
                  bool(lengths[i]) and int(tokens[i, lengths[i] - 1]) in special.stop_ids) for i in range(len(prompts))]
-
-
-@partial(jax.jit, static_argnames=("graphdef", "capacity", "window"))
-def _prefill(graphdef, state, ids, mask, pixels, grid, capacity: int, window: int) -> Prefilled:
-    model = nnx.merge(graphdef, state)
-    logits, cache, deltas = model.prefill(ids, mask, pixels, grid, max_length=capacity, vision_window=window)
-    return Prefilled(logits, cache, deltas)
-
-
-def _jit_prefill(model, ids, mask, pixels, grid, capacity: int, window: int) -> Prefilled:
-    graphdef, state = nnx.split(model)
-    return _prefill(graphdef, state, jnp.asarray(ids), jnp.asarray(mask), jnp.asarray(pixels),
-                    jnp.asarray(grid, jnp.int32), capacity, window)
 
 
 @dataclass

@@ -102,10 +102,12 @@ def sample_token(logits: jax.Array, key: jax.Array, temperature: float, top_p: f
     return jax.random.categorical(key, logits, axis=-1).astype(jnp.int32)
 
 
-@partial(jax.jit, static_argnames=("graphdef", "capacity"))
-def _prefill(graphdef, state, input_ids, attention_mask, pixel_values, image_grid_thw, capacity: int) -> Prefilled:
+@partial(jax.jit, static_argnames=("graphdef", "capacity", "vision_window"))
+def _prefill(graphdef, state, input_ids, attention_mask, pixel_values, image_grid_thw, capacity: int,
+             vision_window: int | None) -> Prefilled:
     model = nnx.merge(graphdef, state)
-    logits, cache, deltas = model.prefill(input_ids, attention_mask, pixel_values, image_grid_thw, max_length=capacity)
+    logits, cache, deltas = model.prefill(input_ids, attention_mask, pixel_values, image_grid_thw, max_length=capacity,
+                                          vision_window=vision_window)
     return Prefilled(logits, cache, deltas)
 
 
@@ -149,8 +151,11 @@ def cache_capacity(prompt_length: int, max_new_tokens: int) -> int:
 
 
 def prefill(model, input_ids, attention_mask=None, pixel_values=None, image_grid_thw=None,
-            max_new_tokens: int = 512) -> Prefilled:
-    """Jitted prompt pass with a cache sized for ``max_new_tokens`` more tokens."""
+            max_new_tokens: int = 512, vision_window: int | None = None) -> Prefilled:
+    """Jitted prompt pass with a cache sized for ``max_new_tokens`` more tokens.
+
+    ``vision_window`` (>= the largest image's patch count) makes each image attend only to itself:
+    without it, vision attention over a batch of images is quadratic in all their patches."""
     graphdef, state = nnx.split(model)
     input_ids = jnp.asarray(input_ids, jnp.int32)
     if attention_mask is None:
@@ -158,7 +163,8 @@ def prefill(model, input_ids, attention_mask=None, pixel_values=None, image_grid
     capacity = cache_capacity(input_ids.shape[1], max_new_tokens)
     return _prefill(graphdef, state, input_ids, jnp.asarray(attention_mask, jnp.int32),
                     None if pixel_values is None else jnp.asarray(pixel_values),
-                    None if image_grid_thw is None else jnp.asarray(image_grid_thw, jnp.int32), capacity)
+                    None if image_grid_thw is None else jnp.asarray(image_grid_thw, jnp.int32), capacity,
+                    vision_window)
 
 
 def decode(model, prefilled: Prefilled, config: GenerationConfig = GenerationConfig(),
