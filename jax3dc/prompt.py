@@ -74,3 +74,22 @@ def chat_messages(prompt_text: str, target_json: str | None = None) -> list[dict
     if target_json is not None:
         messages.append({"role": "assistant", "content": [{"type": "text", "text": target_json}]})
     return messages
+
+
+#: The stage-1 code backend's user text (SPEC §6): the model sees only the RGB image and writes a
+#: part program, which the interpreter (jax3dc.program) runs into one mesh per part.
+CODE_PROMPT = (
+    "The image shows an object. Write a part program that rebuilds it: one statement per line, "
+    "using only the predefined functions (box, cylinder, cone, sphere, torus, extrude, lathe, sweep, "
+    "bevel, difference, combine, linear_array, grid_array, radial_array, mirror, translate, rotate, "
+    "scale, material). End each part with part(<id>, '<name>', mesh, material=...), ids from 1. "
+    "Frame: +Z up, the front faces -Y, the largest extent is 1."
+)
+
+
+def code_messages(program: str | None = None) -> list[dict]:
+    """User turn (image I, CODE_PROMPT) and, for training, the assistant turn (the program)."""
+    messages: list[dict] = [{"role": "user", "content": [{"type": "image"}, {"type": "text", "text": CODE_PROMPT}]}]
+    if program is not None:
+        messages.append({"role": "assistant", "content": [{"type": "text", "text": program}]})
+    return messages
