@@ -13,7 +13,7 @@ import hashlib
 import json
 import os
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Iterable, Iterator, Sequence
 
 from array_record.python.array_record_module import ArrayRecordReader, ArrayRecordWriter
 
@@ -86,3 +86,25 @@ def finished(directory: Path, manifest: dict, name: str) -> bool:
     entry = manifest["shards"].get(name)
     path = directory / name
     return entry is not None and path.exists() and file_sha256(path) == entry["sha256"]
+
+
+def shard_paths(sources: Sequence[str | Path], split: str | None) -> list[Path]:
+    """ArrayRecord files named by ``sources`` (files, or folders searched recursively).
+
+    In a folder, files whose name starts with ``split`` are taken when there are any (shards are
+    named per split), else every ``*.array_record`` file (records are then filtered by meta.split).
+    """
+    paths: list[Path] = []
+    for source in sources:
+        source = Path(source)
+        if source.is_file():
+            paths.append(source)
+        elif source.is_dir():
+            found = sorted(p for p in source.rglob(f"*{SHARD_SUFFIX}") if p.is_file())
+            named = [p for p in found if split and p.name.startswith(split)]
+            paths.extend(named or found)
+        else:
+            raise InputFileError(source, "no such shard file or folder")
+    if not paths:
+        raise InputFileError(", ".join(map(str, sources)), f"no {SHARD_SUFFIX} files found")
+    return paths

@@ -28,7 +28,7 @@ from PIL import Image
 from tqdm import tqdm
 
 from data_pipeline.record import CorruptRecordError, Record
-from data_pipeline.shards import SHARD_SUFFIX, read_shard
+from data_pipeline.shards import read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.model.chat import encode_chat
@@ -41,28 +41,6 @@ from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
 
 # A legend line of the SPEC §3 prompt: "id: #rrggbb | cx cy cz | ex ey ez".
 _LEGEND = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \| (\S+) (\S+) (\S+) \| (\S+) (\S+) (\S+)$", re.MULTILINE)
-
-
-def shard_paths(sources: Sequence[str | Path], split: str | None) -> list[Path]:
-    """ArrayRecord files named by ``sources`` (files, or folders searched recursively).
-
-    In a folder, files whose name starts with ``split`` are taken when there are any (shards are
-    named per split), else every ``*.array_record`` file (records are then filtered by meta.split).
-    """
-    paths: list[Path] = []
-    for source in sources:
-        source = Path(source)
-        if source.is_file():
-            paths.append(source)
-        elif source.is_dir():
-            found = sorted(p for p in source.rglob(f"*{SHARD_SUFFIX}") if p.is_file())
-            named = [p for p in found if split and p.name.startswith(split)]
-            paths.extend(named or found)
-        else:
-            raise InputFileError(source, "no such shard file or folder")
-    if not paths:
-        raise InputFileError(", ".join(map(str, sources)), f"no {SHARD_SUFFIX} files found")
-    return paths
 
 
 def read_records(paths: Iterable[Path], split: str | None = None) -> Iterator[Record]:

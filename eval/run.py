@@ -32,7 +32,8 @@ def _positive(text: str) -> int:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    from eval.generation import Generator, generate_predictions, read_records, reference_of, shard_paths
+    from data_pipeline.shards import shard_paths
+    from eval.generation import Generator, generate_predictions, read_records, reference_of
     from eval.metrics.cases import build_cases, load_predictions
     from eval.metrics.tables import format_tables
     from eval.report import write_report

@@ -228,7 +228,8 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
     through jax3dc.model.generate.generate with full vision attention."""
     import jax
 
-    from eval.generation import Generator, read_records, shard_paths
+    from data_pipeline.shards import shard_paths
+    from eval.generation import Generator, read_records
     from jax3dc.model.generate import GenerationConfig, generate
     from jax3dc.model.processor import preprocess_images
 
