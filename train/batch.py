@@ -15,11 +15,15 @@ is a dict of numpy arrays, leading axis = rows:
     labels          int32 [rows, L]   the target AT each position (already shifted: the token
                                       that should follow position t), any value where masked
     loss_mask       float32 [rows, L] 1 where the position's prediction is scored (answer tokens)
-    pixel_values    float32 [rows, P, D]  optional: one image per row, P patches of
+    pixel_values    float32 [rows, P, D]  optional: each row's images, P patches in all of
                                       D = 3 * temporal_patch * patch**2 values (HF layout)
-    image_grid_thw  int32 [rows, 3]   optional, with pixel_values: (t, h, w) patch grid
+    image_grid_thw  int32 [rows, 3] or [rows, k, 3]  optional, with pixel_values: the (t, h, w)
+                                      patch grid of each of the row's 1 or k images
     position_ids    int32 [rows, 3, L] optional: multimodal RoPE ids (t, h, w); computed from
                                       input_ids and image_grid_thw when absent
+    segment_ids     int32 [rows, L]   optional: packed rows (data_pipeline/packing.py) number
+                                      their examples 1.. (0 = padding); attention stays inside
+                                      an example. Needs position_ids (restarting per example).
 
 Rows of a batch all share one image size so that shapes are static under jit; a loader
 buckets by size (or resizes) to keep it so. The trainer splits the rows into micro-batches
@@ -66,6 +70,11 @@ def check_batch(batch: Mapping[str, np.ndarray], rows: int, seq_len: int) -> Non
     for key in OPTIONAL_TOKEN_KEYS:
         if key in batch and batch[key].shape != (rows, seq_len):
             raise BatchError(f"batch[{key!r}] has shape {batch[key].shape}, expected {(rows, seq_len)}")
+    if "segment_ids" in batch:
+        if batch["segment_ids"].shape != (rows, seq_len):
+            raise BatchError(f"batch['segment_ids'] has shape {batch['segment_ids'].shape}, expected {(rows, seq_len)}")
+        if "position_ids" not in batch:
+            raise BatchError("batch has segment_ids (packed rows) but no position_ids")
     if "position_ids" in batch and batch["position_ids"].shape != (rows, 3, seq_len):
         raise BatchError(f"batch['position_ids'] has shape {batch['position_ids'].shape}, "
                          f"expected {(rows, 3, seq_len)}")
@@ -76,10 +85,11 @@ def check_batch(batch: Mapping[str, np.ndarray], rows: int, seq_len: int) -> Non
         pv, thw = batch["pixel_values"], batch["image_grid_thw"]
         if pv.ndim != 3 or pv.shape[0] != rows:
             raise BatchError(f"batch['pixel_values'] has shape {pv.shape}, expected (rows={rows}, P, D)")
-        if thw.shape != (rows, 3):
-            raise BatchError(f"batch['image_grid_thw'] has shape {thw.shape}, expected {(rows, 3)}")
-        if not np.all(np.prod(thw, axis=1) == pv.shape[1]):
-            raise BatchError(f"image_grid_thw {thw.tolist()} does not multiply to P={pv.shape[1]} patches")
+        if thw.shape[0] != rows or thw.shape[-1] != 3 or thw.ndim not in (2, 3):
+            raise BatchError(f"batch['image_grid_thw'] has shape {thw.shape}, expected (rows={rows}, [k,] 3)")
+        patches = np.prod(thw, axis=-1).reshape(rows, -1).sum(axis=1)
+        if not np.all(patches == pv.shape[1]):
+            raise BatchError(f"image grids give {patches.tolist()} patches per row, pixel_values has P={pv.shape[1]}")
 
 
 @dataclass(frozen=True)

@@ -116,17 +116,26 @@ def count_params(tree: Any) -> int:
     return int(sum(np.prod(x.shape) for x in jax.tree.leaves(tree)))
 
 
-def model_inputs(micro: dict[str, jax.Array]) -> dict[str, jax.Array | None]:
-    """Batch-protocol arrays -> the model's keyword arguments (one image per row)."""
-    pixel_values = micro.get("pixel_values")
+def model_inputs(micro: dict[str, jax.Array]) -> dict[str, Any]:
+    """Batch-protocol arrays -> the model's keyword arguments.
+
+    Rows own their images (1 or k each, all of one size): each image attends in its own vision
+    window, and with k images per row the model places features per row (packed rows may leave
+    image slots unused)."""
+    pixel_values, grid = micro.get("pixel_values"), micro.get("image_grid_thw")
+    images_per_row = window = None
     if pixel_values is not None:
+        per_row = 1 if grid.ndim == 2 else grid.shape[1]
+        window = pixel_values.shape[1] // per_row
+        images_per_row = per_row if grid.ndim == 3 else None
         pixel_values = pixel_values.reshape(-1, pixel_values.shape[-1])
+        grid = grid.reshape(-1, 3)
     position_ids = micro.get("position_ids")
     if position_ids is not None:  # protocol [rows, 3, L] -> model [3, rows, L]
         position_ids = jnp.transpose(position_ids, (1, 0, 2))
     return dict(input_ids=micro["input_ids"], attention_mask=micro.get("attention_mask"),
-                pixel_values=pixel_values, image_grid_thw=micro.get("image_grid_thw"),
-                position_ids=position_ids)
+                pixel_values=pixel_values, image_grid_thw=grid, position_ids=position_ids,
+                segment_ids=micro.get("segment_ids"), images_per_row=images_per_row, vision_window=window)
 
 
 def score(model: Qwen3VL, micro: dict[str, jax.Array]) -> tuple[jax.Array, jax.Array]:

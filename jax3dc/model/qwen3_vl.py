@@ -17,6 +17,11 @@ Forward pass (training / scoring)::
   ``None`` only for few images: full packed attention costs ``N²`` for N patches in the batch.
 * Right-padded batches (training) may pass ``attention_mask=None``: real tokens never attend to
   the padding after them, so their logits are unchanged, and attention stays purely causal.
+* Packed training rows (several examples per row, see data_pipeline/packing.py): ``segment_ids
+  [B, L]`` (1.. per example, 0 padding) restrict attention to each example, and
+  ``images_per_row`` (static) says that row b owns images ``b*k .. b*k+k-1`` of the grid list,
+  so a row that leaves image slots unused does not shift the next row's features. Give
+  ``position_ids`` with them (each example's own, restarting at 0).
 * ``return_hidden=True`` returns the final-norm hidden states ``[B, L, E]`` instead of logits
   (use ``model.logits(hidden)`` on chunks to bound memory for the 151936-word vocabulary).
 
@@ -65,16 +70,28 @@ class KVCache(NamedTuple):
     length: jax.Array
 
 
-def place_image_tokens(x: jax.Array, image_mask: jax.Array, features: jax.Array, add: bool) -> jax.Array:
+def place_image_tokens(x: jax.Array, image_mask: jax.Array, features: jax.Array, add: bool,
+                       row_start: jax.Array | None = None) -> jax.Array:
     """Puts feature row k at the k-th image token of the batch (row-major), like transformers'
-    ``masked_scatter``; with ``add`` the features are added instead (DeepStack)."""
+    ``masked_scatter``; with ``add`` the features are added instead (DeepStack). With
+    ``row_start [B]`` the k-th image token of row b takes feature ``row_start[b] + k`` instead,
+    so rows with image slots they leave unused (packed training rows) stay aligned."""
     b, seq = image_mask.shape
-    flat = image_mask.reshape(-1)
-    order = jnp.clip(jnp.cumsum(flat) - 1, 0, features.shape[0] - 1)
+    if row_start is None:
+        order = jnp.cumsum(image_mask.reshape(-1)) - 1
+    else:
+        order = (row_start[:, None] + jnp.cumsum(image_mask, axis=1) - 1).reshape(-1)
+    order = jnp.clip(order, 0, features.shape[0] - 1)
     placed = features.astype(x.dtype)[order].reshape(b, seq, -1)
     if add:
         return x + jnp.where(image_mask[..., None], placed, 0)
     return jnp.where(image_mask[..., None], placed, x)
+
+
+def image_row_starts(image_grid_thw: jax.Array, images_per_row: int, merge: int) -> jax.Array:
+    """Index of each row's first image feature when every row owns ``images_per_row`` images."""
+    tokens = jnp.prod(jnp.asarray(image_grid_thw).reshape(-1, 3), axis=-1) // merge**2
+    return (jnp.cumsum(tokens) - tokens)[::images_per_row]
 
 
 def _check_image_tokens(input_ids, image_grid_thw, cfg: Qwen3VLConfig) -> None:
@@ -96,6 +113,16 @@ def _attention_mask(key_valid: jax.Array, q_pos: jax.Array, k_pos: jax.Array) ->
     causal = k_pos[None, :] <= q_pos[:, None]
     mask = causal[None] & key_valid[:, None, :]
     return (mask | (k_pos[None, :] == q_pos[:, None])[None])[:, None]
+
+
+def _segment_mask(segment_ids: jax.Array) -> jax.Array:
+    """[B, 1, L, L]: causal within each segment (packed example); segment 0 is padding, which
+    sees only itself."""
+    length = segment_ids.shape[1]
+    pos = jnp.arange(length)
+    causal = pos[None, :] <= pos[:, None]
+    same = (segment_ids[:, :, None] == segment_ids[:, None, :]) & (segment_ids[:, None, :] > 0)
+    return ((same & causal[None]) | jnp.eye(length, dtype=bool)[None])[:, None]
 
 
 class Qwen3VL(nnx.Module):
@@ -124,25 +151,34 @@ class Qwen3VL(nnx.Module):
             out = jnp.einsum("...e,ve->...v", hidden.astype(self.dtype), emb)
         return constrain(out, ("batch",) + ("length",) * (out.ndim - 2) + ("act_vocab",))
 
-    def _inputs(self, input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_window):
-        """Embeddings with image features placed, DeepStack features, image mask, rope ids."""
+    def _inputs(self, input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_window,
+                images_per_row=None):
+        """Embeddings with image features placed, DeepStack features, image mask, rope ids, and
+        where each row's image features start (None: row-major over the batch)."""
         cfg = self.config
         x = self.language_model.embed(input_ids)
         image_mask = input_ids == cfg.image_token_id
         deepstack: list[jax.Array] = []
+        row_start = None
         if pixel_values is not None:
             if image_grid_thw is None:
                 raise ValueError("pixel_values given without image_grid_thw")
-            _check_image_tokens(input_ids, image_grid_thw, cfg)
+            if images_per_row is None:
+                _check_image_tokens(input_ids, image_grid_thw, cfg)
+            else:
+                if position_ids is None:
+                    raise ValueError("images_per_row (packed rows) needs the rows' position_ids")
+                row_start = image_row_starts(image_grid_thw, images_per_row, cfg.vision.spatial_merge_size)
             tokens, deepstack = self.visual(pixel_values, image_grid_thw, vision_window)
-            x = place_image_tokens(x, image_mask, tokens, add=False)
+            x = place_image_tokens(x, image_mask, tokens, add=False, row_start=row_start)
         deltas = None
         if position_ids is None:
             position_ids, deltas = get_rope_index(input_ids, image_grid_thw, cfg.image_token_id,
                                                   cfg.vision.spatial_merge_size, attention_mask)
-        return x, deepstack, image_mask, position_ids, deltas
+        return x, deepstack, image_mask, position_ids, deltas, row_start
 
-    def _layers(self, x, cos, sin, mask, deepstack, image_mask, caches=None, write_index=None, from_cache=True):
+    def _layers(self, x, cos, sin, mask, deepstack, image_mask, caches=None, write_index=None, from_cache=True,
+                row_start=None):
         new_caches = []
         for i, layer in enumerate(self.language_model.layers):
             cache = None if caches is None else caches[i]
@@ -153,23 +189,26 @@ class Qwen3VL(nnx.Module):
                 x, cache = layer(x, cos, sin, mask, cache, write_index, from_cache)
             new_caches.append(cache)
             if i < len(deepstack):
-                x = place_image_tokens(x, image_mask, deepstack[i], add=True)
+                x = place_image_tokens(x, image_mask, deepstack[i], add=True, row_start=row_start)
         return self.language_model.norm(x), new_caches
 
     # ------------------------------------------------------------------ forward
     def __call__(self, input_ids: jax.Array, attention_mask: jax.Array | None = None,
                  pixel_values: jax.Array | None = None, image_grid_thw: jax.Array | None = None,
                  position_ids: jax.Array | None = None, return_hidden: bool = False,
-                 vision_window: int | None = None) -> jax.Array:
-        x, deepstack, image_mask, position_ids, _ = self._inputs(
-            input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_window)
+                 vision_window: int | None = None, segment_ids: jax.Array | None = None,
+                 images_per_row: int | None = None) -> jax.Array:
+        x, deepstack, image_mask, position_ids, _, row_start = self._inputs(
+            input_ids, attention_mask, pixel_values, image_grid_thw, position_ids, vision_window, images_per_row)
         t = self.config.text
         cos, sin = text_rope(position_ids, t.head_dim, t.rope_theta, t.mrope_section)
         mask = None
-        if attention_mask is not None:
+        if segment_ids is not None:
+            mask = _segment_mask(segment_ids)
+        elif attention_mask is not None:
             pos = jnp.arange(input_ids.shape[1])
             mask = _attention_mask(attention_mask.astype(bool), pos, pos)
-        hidden, _ = self._layers(x, cos, sin, mask, deepstack, image_mask)
+        hidden, _ = self._layers(x, cos, sin, mask, deepstack, image_mask, row_start=row_start)
         return hidden if return_hidden else self.logits(hidden)
 
     # ------------------------------------------------------------------ KV-cache generation
@@ -191,7 +230,7 @@ class Qwen3VL(nnx.Module):
         if max_length < seq:
             raise ValueError(f"max_length {max_length} < prompt length {seq}")
         valid = jnp.ones((b, seq), bool) if attention_mask is None else attention_mask.astype(bool)
-        x, deepstack, image_mask, position_ids, deltas = self._inputs(
+        x, deepstack, image_mask, position_ids, deltas, _ = self._inputs(
             input_ids, valid, pixel_values, image_grid_thw, None, vision_window)
         t = self.config.text
         cos, sin = text_rope(position_ids, t.head_dim, t.rope_theta, t.mrope_section)

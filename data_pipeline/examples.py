@@ -1,0 +1,76 @@
+"""A dataset record as the model trains on it: chat tokens, loss labels and image patches.
+
+Two tasks read the same records (SPEC §4, §6):
+
+* ``structure`` (stage 2): images I and S, the record's prompt -> the target JSON;
+* ``code`` (stage-1 code backend): image I and CODE_PROMPT -> the record's part program.
+
+The chat is built exactly as generation builds it (jax3dc.prompt + jax3dc.model.chat), so a
+model sees at inference the very tokens it was trained on, up to the assistant answer.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+
+import numpy as np
+from PIL import Image
+
+from data_pipeline.packing import Example
+from data_pipeline.record import Record
+from jax3dc.errors import Jax3dcError
+from jax3dc.model.chat import encode_chat
+from jax3dc.model.processor import ImageProcessorConfig, preprocess_images
+from jax3dc.model.tokenizer import Tokenizer
+from jax3dc.prompt import chat_messages, code_messages
+
+TASKS = ("structure", "code")
+
+
+class UnusableRecord(Jax3dcError):
+    """A record that cannot become a training example (bad PNG, no program for the code task)."""
+
+
+@dataclass(frozen=True)
+class ExampleEncoder:
+    """Turns records into Examples; picklable, so grain workers each hold a copy."""
+
+    tokenizer: Tokenizer
+    processor: ImageProcessorConfig
+    merge: int
+    task: str = "structure"
+    image_size: int | None = None  # resize I and S to this square side first (S nearest-neighbour)
+
+    @property
+    def images_per_example(self) -> int:
+        return 2 if self.task == "structure" else 1
+
+    def images(self, record: Record) -> list[Image.Image]:
+        blobs = (record.image_png, record.seg_png)[: self.images_per_example]
+        out = []
+        for name, blob in zip(("image", "segmentation"), blobs):
+            try:
+                image = Image.open(io.BytesIO(blob))
+                image.load()
+            except (OSError, ValueError) as e:
+                raise UnusableRecord(f"record {record.key!r}: {name} PNG is not readable: {e}") from None
+            if self.image_size and image.size != (self.image_size, self.image_size):
+                resample = Image.Resampling.NEAREST if name == "segmentation" else Image.Resampling.BICUBIC
+                image = image.convert("RGB").resize((self.image_size, self.image_size), resample)
+            out.append(image)
+        return out
+
+    def messages(self, record: Record) -> list[dict]:
+        if self.task == "structure":
+            return chat_messages(record.prompt, record.target)
+        if not record.program:
+            raise UnusableRecord(f"record {record.key!r} has no part program (code task)")
+        return code_messages(record.program)
+
+    def encode(self, record: Record) -> Example:
+        messages = self.messages(record)
+        processed = preprocess_images(self.images(record), self.processor)
+        chat = encode_chat(self.tokenizer, messages, processed.image_grid_thw, self.merge)
+        return Example(record.key, chat.input_ids, chat.labels, processed.pixel_values,
+                       np.asarray(processed.image_grid_thw, np.int64))
