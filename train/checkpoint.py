@@ -51,19 +51,21 @@ class RunCheckpoints:
              val_loss: float | None = None) -> None:
         """Start writing step `step`; returns while the write goes on in the background."""
         metrics = {"val_loss": float(val_loss)} if val_loss is not None else None
-        self.manager.save(step, args=ocp.args.Composite(
-            state=ocp.args.StandardSave(state), frozen=ocp.args.StandardSave(frozen),
-            loader=ocp.args.JsonSave(loader_state), meta=ocp.args.JsonSave(meta)),
-            metrics=metrics, force=True)
+        items = dict(state=ocp.args.StandardSave(state), loader=ocp.args.JsonSave(loader_state),
+                     meta=ocp.args.JsonSave(meta))
+        if jax.tree.leaves(frozen):  # nothing frozen (training everything): orbax refuses empty trees
+            items["frozen"] = ocp.args.StandardSave(frozen)
+        self.manager.save(step, args=ocp.args.Composite(**items), metrics=metrics, force=True)
 
     def restore(self, step: int, state_like: Any, state_shardings: Any, frozen_like: Any,
                 frozen_shardings: Any) -> tuple[Any, Any, dict, dict]:
         """(state, frozen, loader_state, meta) of `step`, placed with the given shardings."""
-        out = self.manager.restore(step, args=ocp.args.Composite(
-            state=ocp.args.StandardRestore(_abstract(state_like, state_shardings)),
-            frozen=ocp.args.StandardRestore(_abstract(frozen_like, frozen_shardings)),
-            loader=ocp.args.JsonRestore(), meta=ocp.args.JsonRestore()))
-        return out["state"], out["frozen"], out["loader"], out["meta"]
+        items = dict(state=ocp.args.StandardRestore(_abstract(state_like, state_shardings)),
+                     loader=ocp.args.JsonRestore(), meta=ocp.args.JsonRestore())
+        if jax.tree.leaves(frozen_like):
+            items["frozen"] = ocp.args.StandardRestore(_abstract(frozen_like, frozen_shardings))
+        out = self.manager.restore(step, args=ocp.args.Composite(**items))
+        return out["state"], out["frozen"] if "frozen" in items else frozen_like, out["loader"], out["meta"]
 
     def wait(self) -> None:
         """Block until every started save is on disk."""

@@ -35,11 +35,17 @@ class TrainConfig:
     # Model: a preset name (tiny, small, qwen3_vl_4b: random weights) or an HF checkpoint dir.
     init: str = "small"
     output_dir: str = "runs/train"
-    # Data: "synthetic" (built-in counting sequences) or a directory the grain loader reads.
+    # Data: "synthetic" (built-in counting sequences) or dataset folders (comma-separated) that
+    # the grain loader (data_pipeline/loader.py) reads, mixed by data_weights.
     data: str = "synthetic"
-    val_data: str = ""  # empty: validate on held-out synthetic / the data's own split
+    data_weights: tuple[float, ...] = ()
+    val_data: str = ""  # empty: validate on held-out synthetic / the datasets' val split
+    task: str = "structure"  # structure: I + S + prompt -> JSON; code: I -> part program
+    tokenizer: str = ""  # folder with tokenizer.json; empty: the init checkpoint's, else Qwen3's
+    pack: int = 4  # examples packed per row at most (1: one padded example per row)
+    loader_workers: int = 0  # grain worker processes decoding and packing
     seq_len: int = 8192
-    image_size: int = 448  # synthetic data only: square image side in pixels
+    image_size: int = 448  # square side of I and S in pixels (records of another size are resized)
     batch_size: int = 16  # effective (global) batch in sequences per optimiser step
     grad_accum: int = 16  # micro-batches per step; batch_size / grad_accum rows at a time
     steps: int = 1000
@@ -144,6 +150,10 @@ def validate(cfg: TrainConfig) -> None:
     """Reject settings that cannot work before any device work starts."""
     if cfg.batch_size % cfg.grad_accum:
         raise ConfigError(f"batch_size {cfg.batch_size} is not a multiple of grad_accum {cfg.grad_accum}")
+    if cfg.task not in ("structure", "code"):
+        raise ConfigError(f"task {cfg.task!r}: expected structure or code")
+    if cfg.pack < 1 or cfg.loader_workers < 0:
+        raise ConfigError(f"pack must be >= 1 and loader_workers >= 0 (got {cfg.pack}, {cfg.loader_workers})")
     if cfg.remat not in ("none", "full"):
         raise ConfigError(f"remat {cfg.remat!r}: expected none or full")
     if cfg.compute_dtype not in ("bfloat16", "float32", "float16"):

@@ -18,15 +18,15 @@ from typing import Callable, Iterator
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 import optax
 from jax.sharding import Mesh
 
 from jax3dc.errors import Jax3dcError
 from train import model_state
-from train.batch import ImageLayout, SyntheticBatches, check_batch
+from train.batch import check_batch
 from train.checkpoint import RunCheckpoints
-from train.config import ConfigError, TrainConfig, to_json, validate
+from train.config import TrainConfig, to_json, validate
+from train.data import make_loader, run_processor, run_tokenizer
 from train.metrics_log import FlopsModel, MetricsLog, peak_flops
 from train.optimizer import build_optimizer, learning_rate
 from train.parallel import batch_sharding, build_mesh, global_batch, replicated, to_host
@@ -45,28 +45,6 @@ class RunResult:
     output_dir: str
 
 
-def image_layout(cfg: TrainConfig, mcfg) -> ImageLayout:
-    v = mcfg.vision
-    side, unit = cfg.image_size // v.patch_size, v.spatial_merge_size
-    if cfg.image_size % (v.patch_size * unit):
-        raise ConfigError(f"image_size {cfg.image_size} is not a multiple of patch x merge = {v.patch_size * unit}")
-    return ImageLayout(mcfg.vision_start_token_id, mcfg.image_token_id, mcfg.vision_end_token_id,
-                       (side, side), unit, v.patch_dim)
-
-
-def make_loader(cfg: TrainConfig, mcfg, split: str, padding: bool = True) -> Iterator:
-    """This process's loader for `split` ('train' or 'val')."""
-    if cfg.data != "synthetic":
-        raise ConfigError(f"data {cfg.data!r}: only 'synthetic' is available until the ArrayRecord "
-                          "loader (issue 5) lands")
-    text_vocab = min(mcfg.text.vocab_size, mcfg.vision_start_token_id, mcfg.image_token_id)
-    return SyntheticBatches(vocab=mcfg.text.vocab_size, text_vocab=text_vocab, seq_len=cfg.seq_len,
-                            global_rows=cfg.batch_size, seed=cfg.seed + (0 if split == "train" else 1000),
-                            image=image_layout(cfg, mcfg) if cfg.image_size else None,
-                            process_index=jax.process_index(), process_count=jax.process_count(),
-                            padding=padding)
-
-
 def opt_state_shardings(tx: optax.GradientTransformation, params, params_sharding, mesh: Mesh):
     """Moments are placed like their parameters; counters and the like are replicated."""
     shapes = jax.eval_shape(tx.init, params)
@@ -81,7 +59,10 @@ class Trainer:
         validate(cfg)
         self.cfg = cfg
         self.mesh = build_mesh(cfg.mesh)
-        self.model = model_state.create(cfg, self.mesh, attention_impl)
+        real_data = cfg.data != "synthetic"
+        self.tokenizer = run_tokenizer(cfg) if real_data else None  # synthetic ids need none
+        self.model = model_state.create(cfg, self.mesh, attention_impl, self.tokenizer if real_data else None)
+        self.processor = run_processor(cfg, self.model.config)
         self.tx = build_optimizer(cfg)
         self.schedule = learning_rate(cfg)
         rep = replicated(self.mesh)
@@ -147,7 +128,7 @@ class Trainer:
             self.model.trainable = multihost_utils.process_allgather(self.state.params, tiled=True)
             self.model.frozen = multihost_utils.process_allgather(self.model.frozen, tiled=True)
         if jax.process_index() == 0:
-            model_state.export_hf(self.model, directory)
+            model_state.export_hf(self.model, directory, self.tokenizer, self.processor)
         self.model.trainable = None
 
     def flops_model(self) -> FlopsModel:
@@ -170,7 +151,7 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
         with open(os.path.join(out, "config.json"), "w") as f:
             f.write(to_json(cfg))
     trainer = Trainer(cfg, attention_impl)
-    loader = make_loader(cfg, trainer.model.config, "train")
+    loader = make_loader(cfg, trainer.model.config, "train", trainer.tokenizer, trainer.processor)
     ckpt = RunCheckpoints(os.path.join(out, "checkpoints"), cfg.keep_last)
     start = ckpt.latest_step() or 0
     log = MetricsLog(out, total_steps=cfg.steps, first_step=start, enabled=lead)
@@ -207,10 +188,11 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                     if peak:
                         values["mfu"] = flops.step_flops(cfg.batch_size, cfg.seq_len) / dt / (peak * jax.device_count())
                     timer, timed_steps = time.perf_counter(), 0
+                values.update({f"skipped_{k}": float(v) for k, v in getattr(loader, "skipped", {}).items()})
                 log.write(step, values)
             val_loss = None
             if step % cfg.eval_every == 0 or step == cfg.steps:
-                val_loss = trainer.validate(make_loader(cfg, trainer.model.config, "val"), cfg.eval_batches)
+                val_loss = trainer.validate(make_loader(cfg, trainer.model.config, "val", trainer.tokenizer, trainer.processor), cfg.eval_batches)
                 best_val = val_loss if best_val is None else min(best_val, val_loss)
                 log.write(step, {"loss": val_loss}, kind="val")
             if step % cfg.save_every == 0 or step == cfg.steps:

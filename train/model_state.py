@@ -7,6 +7,7 @@ The model itself (jax3dc.model) knows nothing about optimisers or data.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from dataclasses import dataclass
@@ -58,6 +59,18 @@ def model_config(init: str) -> Qwen3VLConfig:
         return Qwen3VLConfig.from_hf_dict(json.load(f))
 
 
+def fit_to_tokenizer(mcfg: Qwen3VLConfig, tokenizer) -> Qwen3VLConfig:
+    """A preset's config with the vocabulary and special-token ids of the run's tokenizer (a
+    preset trained from scratch may use the packaged Qwen3 tokenizer or a smaller BPE)."""
+    special = tokenizer.special
+    video = tokenizer.token_id("<|video_pad|>")
+    vocab = max(mcfg.text.vocab_size if tokenizer.vocab_size <= mcfg.text.vocab_size else 0,
+                -(-tokenizer.vocab_size // 128) * 128)
+    return dataclasses.replace(
+        mcfg, text=dataclasses.replace(mcfg.text, vocab_size=vocab), image_token_id=special.image_pad,
+        video_token_id=video, vision_start_token_id=special.vision_start, vision_end_token_id=special.vision_end)
+
+
 def dtypes(cfg: TrainConfig) -> tuple[jnp.dtype, jnp.dtype]:
     """(compute dtype, master dtype of the trainable parameters)."""
     compute = jnp.dtype(cfg.compute_dtype)
@@ -70,9 +83,12 @@ def _constructor(cfg: TrainConfig, mcfg: Qwen3VLConfig, attention_impl: str | No
                            attention_impl=attention_impl, remat=cfg.remat == "full")
 
 
-def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None) -> ModelState:
-    """Build the model on the mesh: random weights for a preset, else the HF checkpoint's."""
+def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, tokenizer=None) -> ModelState:
+    """Build the model on the mesh: random weights for a preset (sized to `tokenizer` when one
+    is given), else the HF checkpoint's."""
     mcfg = model_config(cfg.init)
+    if tokenizer is not None and cfg.init in PRESETS:
+        mcfg = fit_to_tokenizer(mcfg, tokenizer)
     compute, _ = dtypes(cfg)
     build = _constructor(cfg, mcfg, attention_impl)
     is_trainable = trainable_filter(cfg.freeze)
@@ -104,12 +120,18 @@ def _load_hf(cfg, mesh, attention_impl, is_trainable, train_sh, frozen_sh, compu
     return cast(t, f)
 
 
-def export_hf(state: ModelState, directory: str) -> None:
-    """Write the model as an HF directory (safetensors + config.json)."""
+def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None) -> None:
+    """Write the model as an HF directory (safetensors + config.json, and the tokenizer and
+    image-processor files the run used, so generation encodes prompts exactly as training did)."""
     from jax3dc.model import params as hf_params
+    from jax3dc.model.chat import VL_CHAT_TEMPLATE
 
     model = state.merged()
     hf_params.save_pretrained(model, model.config, directory)
+    if tokenizer is not None:
+        tokenizer.save_pretrained(directory, chat_template=VL_CHAT_TEMPLATE)
+    if processor is not None:
+        processor.save_pretrained(directory)
 
 
 def count_params(tree: Any) -> int:
