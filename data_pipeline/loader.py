@@ -53,7 +53,8 @@ class LoaderConfig:
     split: str = "train"
     task: str = "structure"
     weights: tuple[float, ...] = ()  # one per source; empty: equal
-    pack: int = 4  # examples per row at most (1: no packing, one padded example per row)
+    pack: int = 6  # examples per row at most (1: no packing, one padded example per row)
+    pixel_dtype: str = "float32"  # float32 (exact) or bfloat16 (half the bytes; for bf16 models)
     image_size: int = 0  # square side I and S are resized to (0: as stored, must agree)
     seed: int = 0
     shuffle: bool = True
@@ -181,7 +182,7 @@ def row_layout(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
     return RowLayout(seq_len=cfg.seq_len, pack=cfg.pack, images_per_example=2 if cfg.task == "structure" else 1,
                      grid=(1, h // processor.patch_size, w // processor.patch_size), patch_dim=model.vision.patch_dim,
                      pad_id=tokenizer.special.endoftext, image_token_id=model.image_token_id,
-                     merge=model.vision.spatial_merge_size)
+                     merge=model.vision.spatial_merge_size, pixel_dtype=cfg.pixel_dtype)
 
 
 def _source(path_list: Sequence[Path], cfg: LoaderConfig) -> grain.MapDataset:

@@ -74,6 +74,12 @@ def rope_positions(input_ids: np.ndarray, image_grid_thw: np.ndarray, image_toke
     return pos.astype(np.int32)
 
 
+def pixel_dtype(name: str) -> np.dtype:
+    import ml_dtypes
+
+    return np.dtype(ml_dtypes.bfloat16) if name == "bfloat16" else np.dtype(name)
+
+
 @dataclass(frozen=True)
 class RowLayout:
     """Static shapes of one packed row."""
@@ -86,6 +92,7 @@ class RowLayout:
     pad_id: int
     image_token_id: int
     merge: int
+    pixel_dtype: str = "float32"  # bfloat16 halves what workers send when the model computes in it
 
     @property
     def patches_per_image(self) -> int:
@@ -107,7 +114,7 @@ def pack_row(examples: Sequence[Example], layout: RowLayout) -> dict[str, np.nda
     loss_mask = np.zeros(L, np.float32)
     segments = np.zeros(L, np.int32)
     positions = np.zeros((3, L), np.int32)
-    pixels = np.zeros((layout.slots * layout.patches_per_image, layout.patch_dim), np.float32)
+    pixels = np.zeros((layout.slots * layout.patches_per_image, layout.patch_dim), pixel_dtype(layout.pixel_dtype))
     offset = 0
     for s, ex in enumerate(examples):
         n = len(ex)

@@ -42,7 +42,7 @@ class TrainConfig:
     val_data: str = ""  # empty: validate on held-out synthetic / the datasets' val split
     task: str = "structure"  # structure: I + S + prompt -> JSON; code: I -> part program
     tokenizer: str = ""  # folder with tokenizer.json; empty: the init checkpoint's, else Qwen3's
-    pack: int = 4  # examples packed per row at most (1: one padded example per row)
+    pack: int = 6  # examples packed per row at most (1: one padded example per row); ~1.5k tokens each at 448 px
     loader_workers: int = 0  # grain worker processes decoding and packing
     seq_len: int = 8192
     image_size: int = 448  # square side of I and S in pixels (records of another size are resized)
