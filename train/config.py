@@ -49,6 +49,7 @@ class TrainConfig:
     batch_size: int = 16  # effective (global) batch in sequences per optimiser step
     grad_accum: int = 16  # micro-batches per step; batch_size / grad_accum rows at a time
     steps: int = 1000
+    time_limit_min: float = 0.0  # > 0: stop (save, export) after this many minutes, even before `steps`
     # Optimiser: AdamW, linear warm-up then cosine decay, clipped global gradient norm.
     lr: float = 1e-5
     warmup_steps: int = 30

@@ -18,6 +18,7 @@ from typing import Callable, Iterator
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optax
 from jax.sharding import Mesh
 
@@ -27,7 +28,7 @@ from train.batch import check_batch
 from train.checkpoint import RunCheckpoints
 from train.config import TrainConfig, to_json, validate
 from train.data import make_loader, run_processor, run_tokenizer
-from train.metrics_log import FlopsModel, MetricsLog, peak_flops
+from train.metrics_log import FlopsModel, MetricsLog, peak_flops, plot_losses
 from train.optimizer import build_optimizer, learning_rate
 from train.parallel import batch_sharding, build_mesh, global_batch, replicated, to_host
 from train.step import TrainState, make_eval_step, make_train_step
@@ -166,6 +167,8 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
     tokens_per_step = cfg.batch_size * cfg.seq_len
     last_loss = math.nan
     timer, timed_steps = None, 0
+    deadline = time.monotonic() + 60 * cfg.time_limit_min if cfg.time_limit_min else None
+    step = start
     try:
         for step in range(start + 1, cfg.steps + 1):
             metrics = trainer.train_step(next(loader))
@@ -177,11 +180,12 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                     f"loss is {values['loss']} at step {step}; stopped without saving it. Last good "
                     f"checkpoint: {'step %d in %s' % (good, ckpt.directory) if good else 'none'}")
             last_loss = values["loss"]
+            last = step == cfg.steps or _out_of_time(deadline)
             if timer is None:  # the first step compiles: time from its end
                 timer = time.perf_counter()
             else:
                 timed_steps += 1
-            if step % cfg.log_every == 0 or step == cfg.steps:
+            if step % cfg.log_every == 0 or last:
                 if timed_steps:
                     dt = (time.perf_counter() - timer) / timed_steps
                     values["tokens_per_s"] = tokens_per_step / dt
@@ -191,19 +195,37 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                 values.update({f"skipped_{k}": float(v) for k, v in getattr(loader, "skipped", {}).items()})
                 log.write(step, values)
             val_loss = None
-            if step % cfg.eval_every == 0 or step == cfg.steps:
+            if step % cfg.eval_every == 0 or last:
                 val_loss = trainer.validate(make_loader(cfg, trainer.model.config, "val", trainer.tokenizer, trainer.processor), cfg.eval_batches)
                 best_val = val_loss if best_val is None else min(best_val, val_loss)
                 log.write(step, {"loss": val_loss}, kind="val")
-            if step % cfg.save_every == 0 or step == cfg.steps:
+            if step % cfg.save_every == 0 or last:
                 trainer.save(ckpt, loader, val_loss, best_val)
             log.advance()
             if on_step is not None:
                 on_step(step, values)
+            if last:
+                break
         ckpt.wait()
-        if cfg.export_hf and start < cfg.steps:
+        if step < cfg.steps:
+            log.message(f"time limit of {cfg.time_limit_min} min reached: stopped at step {step} of {cfg.steps}")
+        if cfg.export_hf and step > start:
             trainer.export(os.path.join(out, "hf"))
     finally:
         ckpt.close()
         log.close()
-    return RunResult(cfg.steps, last_loss, best_val, out)
+    if lead and step > start:
+        plot_losses(out)
+    return RunResult(step, last_loss, best_val, out)
+
+
+def _out_of_time(deadline: float | None) -> bool:
+    """Whether the run's time is up; every process takes process 0's answer so all stop together."""
+    if deadline is None:
+        return False
+    late = time.monotonic() > deadline
+    if jax.process_count() > 1:
+        from jax.experimental import multihost_utils
+
+        late = bool(multihost_utils.broadcast_one_to_all(np.asarray(late)))
+    return late

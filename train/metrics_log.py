@@ -31,6 +31,8 @@ PEAK_FLOPS = {  # dense bf16 FLOP/s, from the vendor data sheets (SXM parts)
 }
 
 
+METRICS_FILE = "metrics.jsonl"
+
 def peak_flops(device_kind: str) -> float | None:
     for name, flops in PEAK_FLOPS.items():
         if name.lower() in device_kind.lower():
@@ -79,7 +81,7 @@ class MetricsLog:
     def __init__(self, directory: str, *, total_steps: int, first_step: int = 0, enabled: bool = True,
                  progress: bool = True):
         self.enabled = enabled
-        self.path = os.path.join(directory, "metrics.jsonl")
+        self.path = os.path.join(directory, METRICS_FILE)
         self._file = None
         self._tb = None
         self._bar = None
@@ -136,3 +138,28 @@ def read_metrics(path: str, kind: str = "train") -> list[dict]:
     """The records of one kind, in file order (a resumed run appends after its predecessor)."""
     with open(path) as f:
         return [r for r in map(json.loads, f) if r.get("kind") == kind]
+
+
+def plot_losses(run_dir: str) -> str:
+    """loss.png in the run folder: training loss and accuracy per step, validation loss on top."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    path = os.path.join(run_dir, METRICS_FILE)
+    train, val = read_metrics(path), read_metrics(path, "val")
+    fig, (ax, acc) = plt.subplots(1, 2, figsize=(10, 3.6))
+    ax.plot([r["step"] for r in train], [r["loss"] for r in train], label="train")
+    if val:
+        ax.plot([r["step"] for r in val], [r["loss"] for r in val], "o-", label="validation")
+    ax.set(xlabel="step", ylabel="token NLL", yscale="log", title="loss")
+    ax.legend()
+    if train and "accuracy" in train[0]:
+        acc.plot([r["step"] for r in train], [r["accuracy"] for r in train])
+    acc.set(xlabel="step", ylabel="next-token accuracy", title="accuracy", ylim=(0, 1))
+    fig.tight_layout()
+    out = os.path.join(run_dir, "loss.png")
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out

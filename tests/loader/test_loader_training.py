@@ -49,3 +49,18 @@ def test_train_on_shards_resume_and_export(dataset: Path, tmp_path: Path) -> Non
     answer_start = int(np.argmax(trained.labels >= 0))
     np.testing.assert_array_equal(prompt.input_ids, trained.input_ids[:answer_start])
     assert generator.config.image_token_id == generator.tokenizer.special.image_pad
+
+
+def test_time_limit_stops_saves_exports_and_plots(tmp_path: Path) -> None:
+    from train.checkpoint import RunCheckpoints
+    from train.loop import run
+
+    cfg = TrainConfig(init="tiny", data="synthetic", output_dir=str(tmp_path), seq_len=32, image_size=0,
+                      batch_size=2, grad_accum=1, steps=50, warmup_steps=1, time_limit_min=1e-4,
+                      log_every=10, eval_every=100, eval_batches=1, save_every=100, remat="none")
+    result = run(cfg)
+    assert result.final_step == 1  # the compiling first step alone outlasts 6 ms
+    ckpt = RunCheckpoints(str(tmp_path / "checkpoints"), 3)
+    assert ckpt.latest_step() == 1
+    ckpt.close()
+    assert (tmp_path / "hf" / "config.json").is_file() and (tmp_path / "loss.png").stat().st_size > 1000
