@@ -41,15 +41,15 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/learning")
     p.add_argument("--init", default="small", help="preset trained from scratch")
-    p.add_argument("--objects", type=int, default=6000)
+    p.add_argument("--objects", type=int, default=2400, help="2 views each; 5%% of objects are test")
     p.add_argument("--image-size", type=int, default=224)
-    p.add_argument("--minutes", type=float, default=4.5, help="training time limit")
+    p.add_argument("--minutes", type=float, default=3.5, help="training time limit")
     p.add_argument("--steps", type=int, default=600, help="schedule length (the time limit may stop earlier)")
     p.add_argument("--seq-len", type=int, default=4096)
     p.add_argument("--batch", type=int, default=32)
     p.add_argument("--lr", type=float, default=1e-3)
-    p.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) - 4), help="loader workers")
-    p.add_argument("--eval-records", type=int, default=256)
+    p.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) - 2), help="loader workers")
+    p.add_argument("--eval-records", type=int, default=240)
     p.add_argument("--eval-batch", type=int, default=64)
     p.add_argument("--max-new-tokens", type=int, default=2048)
     p.add_argument("--set", action="append", default=[], help="extra `jax3dc train --set` overrides")
@@ -61,24 +61,28 @@ def main() -> None:
     _call(["data", "build", "--out", str(out / "data"), "--objects", str(a.objects), "--views", "2",
            "--size", str(a.image_size), "--workers", str(os.cpu_count() or 1), "--quiet"])
     seconds["data"] = time.perf_counter() - t
+    print(f"[learning] data: {seconds['data']:.0f} s", flush=True)
 
     t = time.perf_counter()
     overrides = [f"data={out / 'data'}", f"image_size={a.image_size}", f"seq_len={a.seq_len}",
                  f"batch_size={a.batch}", "grad_accum=1", f"lr={a.lr}", f"warmup_steps={min(30, a.steps // 10)}", f"steps={a.steps}",
-                 f"time_limit_min={a.minutes}", "freeze=", f"loader_workers={a.workers}", "eval_every=100",
+                 f"time_limit_min={a.minutes}", "freeze=", f"loader_workers={a.workers}", "eval_every=100", "eval_batches=2",
                  "save_every=200", "log_every=10", *a.set]
     _call(["train", "--init", a.init, "--output-dir", str(out / "train"), *[x for o in overrides for x in ("--set", o)]])
     seconds["train"] = time.perf_counter() - t
+    print(f"[learning] train: {seconds['train']:.0f} s", flush=True)
 
     t = time.perf_counter()
     _call(["eval", "run", "--checkpoint", str(out / "train" / "hf"), "--data", str(out / "data"), "--split", "test",
            "--limit", str(a.eval_records), "--batch-size", str(a.eval_batch), "--bucket", "256",
            "--max-new-tokens", str(a.max_new_tokens), "--out", str(out / "eval"), "--overlays", "8"])
     seconds["evaluate"] = time.perf_counter() - t
+    print(f"[learning] evaluate: {seconds['evaluate']:.0f} s", flush=True)
 
     t = time.perf_counter()
     _call(["eval", "baselines", "--ref", str(out / "eval" / "references.jsonl"), "--out", str(out / "baselines")])
     seconds["baselines"] = time.perf_counter() - t
+    print(f"[learning] baselines: {seconds['baselines']:.0f} s", flush=True)
 
     model = json.loads((out / "eval" / "metrics.json").read_text())
     table = {"trained": _row(model)}

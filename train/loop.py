@@ -166,12 +166,15 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
     peak = peak_flops(jax.devices()[0].device_kind)
     tokens_per_step = cfg.batch_size * cfg.seq_len
     last_loss = math.nan
-    timer, timed_steps = None, 0
+    timer, timed_steps, wait_s = None, 0, 0.0
     deadline = time.monotonic() + 60 * cfg.time_limit_min if cfg.time_limit_min else None
     step = start
     try:
         for step in range(start + 1, cfg.steps + 1):
-            metrics = trainer.train_step(next(loader))
+            waited = time.perf_counter()
+            batch = next(loader)
+            wait_s += time.perf_counter() - waited
+            metrics = trainer.train_step(batch)
             values = {k: float(to_host(v)) for k, v in metrics.items()}
             if not math.isfinite(values["loss"]):
                 ckpt.wait()
@@ -182,16 +185,18 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
             last_loss = values["loss"]
             last = step == cfg.steps or _out_of_time(deadline)
             if timer is None:  # the first step compiles: time from its end
-                timer = time.perf_counter()
+                timer, wait_s = time.perf_counter(), 0.0
             else:
                 timed_steps += 1
             if step % cfg.log_every == 0 or last:
                 if timed_steps:
                     dt = (time.perf_counter() - timer) / timed_steps
                     values["tokens_per_s"] = tokens_per_step / dt
+                    values["data_wait_frac"] = wait_s / (dt * timed_steps)  # > 0.1: the loader limits the run
                     if peak:
                         values["mfu"] = flops.step_flops(cfg.batch_size, cfg.seq_len) / dt / (peak * jax.device_count())
                     timer, timed_steps = time.perf_counter(), 0
+                wait_s = 0.0
                 values.update({f"skipped_{k}": float(v) for k, v in getattr(loader, "skipped", {}).items()})
                 log.write(step, values)
             val_loss = None
