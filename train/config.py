@@ -66,6 +66,7 @@ class TrainConfig:
     # state in float32 (else in the compute dtype, half the memory).
     compute_dtype: str = "bfloat16"
     master_fp32: bool = True
+    attention: str = "auto"  # auto: cuDNN fused attention on GPU, XLA elsewhere; or cudnn / xla
     remat: str = "full"  # full: decoder layers recompute activations in the backward pass; none
     mesh: MeshConfig = field(default_factory=MeshConfig)
     seed: int = 0
@@ -155,6 +156,8 @@ def validate(cfg: TrainConfig) -> None:
         raise ConfigError(f"task {cfg.task!r}: expected structure or code")
     if cfg.pack < 1 or cfg.loader_workers < 0:
         raise ConfigError(f"pack must be >= 1 and loader_workers >= 0 (got {cfg.pack}, {cfg.loader_workers})")
+    if cfg.attention not in ("auto", "cudnn", "xla"):
+        raise ConfigError(f"attention {cfg.attention!r}: expected auto, cudnn or xla")
     if cfg.remat not in ("none", "full"):
         raise ConfigError(f"remat {cfg.remat!r}: expected none or full")
     if cfg.compute_dtype not in ("bfloat16", "float32", "float16"):

@@ -46,6 +46,14 @@ class RunResult:
     output_dir: str
 
 
+def attention_backend(setting: str) -> str | None:
+    """jax.nn.dot_product_attention's implementation: cuDNN's fused kernel on GPUs (jax's own
+    default is plain XLA, which writes every [heads, L, L] score matrix to memory), else XLA."""
+    if setting == "auto":
+        return "cudnn" if jax.default_backend() == "gpu" else None
+    return None if setting == "xla" else setting
+
+
 def opt_state_shardings(tx: optax.GradientTransformation, params, params_sharding, mesh: Mesh):
     """Moments are placed like their parameters; counters and the like are replicated."""
     shapes = jax.eval_shape(tx.init, params)
@@ -59,6 +67,7 @@ class Trainer:
     def __init__(self, cfg: TrainConfig, attention_impl: str | None = None):
         validate(cfg)
         self.cfg = cfg
+        attention_impl = attention_impl or attention_backend(cfg.attention)
         self.mesh = build_mesh(cfg.mesh)
         real_data = cfg.data != "synthetic"
         self.tokenizer = run_tokenizer(cfg) if real_data else None  # synthetic ids need none
