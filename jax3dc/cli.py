@@ -23,6 +23,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "train.cli",
     "eval.demo_cli",
     "eval.physics.cli",
+    "eval.predict.cli",
 )
 
 

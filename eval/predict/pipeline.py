@@ -1,0 +1,164 @@
+"""`predict`: one image in, a structured, simulation-ready object out (SPEC §1, issue 9).
+
+Steps, each writing its outputs into ``out`` as soon as they exist, so that a failure later on
+leaves every output made before it (and the report says what failed):
+  1. image I (any image Pillow reads) and the palette of this image (seeded from its bytes);
+  2. stage 1: part meshes (code model -> part program -> interpreter, or a segmented mesh file)
+     -> parts/ (+ program.txt for the code backend);
+  3. S rendered from the image's camera -> seg.png;
+  4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
+     canonical); invalid output -> structure_raw.txt and a StructureError;
+  5. exports -> object.urdf, object.xml, object.glb, object_blender.py (+ meshes/);
+  6. physics verdict -> physics.json;
+  7. report.html / report.png (always, when stage 1 gave parts).
+
+The models are plain text-in/text-out callables: pass ``generate_structure`` / ``generate_program``
+to stand in for a checkpoint (tests do; so can a caller with its own model server).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from PIL import Image
+
+from data_pipeline.render import Camera, png_bytes
+from eval.predict.models import DEFAULT_MAX_NEW_TOKENS, TextModel, code_model, structure_model
+from eval.predict.outputs import write_exports, write_physics
+from eval.predict.report import ReportInputs, write_report
+from eval.predict.segmentation import default_camera, render_segmentation
+from eval.predict.stage1 import CODE, Stage1, parse_stage1, stage1_from_mesh, stage1_from_program
+from jax3dc.errors import InputFileError, Jax3dcError, StructureError
+from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.model.processor import load_image
+from jax3dc.palette import object_palette
+from jax3dc.prompt import CODE_PROMPT, build_prompt
+from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
+
+MAX_SEG_SIDE = 1024  # px; S is square, at the image's larger side up to this
+PALETTE_CATEGORY = "image"  # palette seed: "image/<sha256 of the image>", the same image gets the same colours
+
+OutputListener = Callable[[str, Path], None]
+"""Called with (what, path) as each output is written (the CLI prints them)."""
+
+
+@dataclass
+class PredictResult:
+    """What a prediction produced; ``files`` maps an output's name to its path."""
+
+    out: Path
+    stage1: Stage1
+    camera: Camera
+    prompt: str
+    files: dict[str, Path] = field(default_factory=dict)
+    raw_text: str | None = None
+    structure: Structure | None = None
+    verdict: dict | None = None
+
+
+def _image_and_digest(image: str | Path | Image.Image) -> tuple[Image.Image, str]:
+    if isinstance(image, Image.Image):
+        rgb = image.convert("RGB")
+        return rgb, hashlib.sha256(png_bytes(np.asarray(rgb))).hexdigest()
+    path = Path(image)
+    rgb = load_image(path).convert("RGB")
+    return rgb, hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _seg_side(image: Image.Image) -> int:
+    return min(max(image.width, image.height), MAX_SEG_SIDE)
+
+
+def run_stage1(stage1: str, image: Image.Image, code_model_dir: str | Path | None,
+               generate_program: TextModel | None, max_new_tokens: int, dtype: str) -> Stage1:
+    backend = parse_stage1(stage1)
+    if backend != CODE:
+        return stage1_from_mesh(backend)
+    if generate_program is None:
+        if code_model_dir is None:
+            raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
+        from eval.generation import Generator
+
+        generate_program = code_model(Generator.load(code_model_dir, dtype), image, max_new_tokens)
+    return stage1_from_program(generate_program(CODE_PROMPT))
+
+
+def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
+            code_model_dir: str | Path | None = None, out: str | Path = "prediction", camera: Camera | None = None,
+            generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
+            scale: float | None = None, max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS, dtype: str = "bfloat16",
+            on_output: OutputListener | None = None) -> PredictResult:
+    """Runs both stages on ``image`` and writes every output into ``out``.
+
+    ``stage1``: "code" or "mesh:FILE". ``structure_model_dir`` / ``code_model_dir``: checkpoint
+    folders (``eval.generation.Generator.load``); ``generate_structure`` (SPEC §3 prompt text ->
+    structure JSON text, seeing I and S) and ``generate_program`` (the code prompt -> part program
+    text, seeing I) replace them. ``camera``: the image's camera in the normalised frame (default:
+    a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
+    file's units per nu, assumed metres; 1.0 for the code backend, whose programs are in nu).
+    Raises a Jax3dcError subclass on bad input, after writing every output it could.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    def wrote(name: str, path: Path) -> None:
+        result.files[name] = path
+        if on_output is not None:
+            on_output(name, path)
+
+    rgb, digest = _image_and_digest(image)
+    parts_in = run_stage1(stage1, rgb, code_model_dir, generate_program, max_new_tokens, dtype)
+    palette = object_palette(PALETTE_CATEGORY, digest)
+    boxes = part_boxes(parts_in.parts)
+    camera = camera or default_camera(parts_in.parts)
+    result = PredictResult(out, parts_in, camera, build_prompt(boxes, palette, None))
+    if parts_in.program is not None:
+        (out / "program.txt").write_text(parts_in.program, encoding="utf-8")
+        wrote("program", out / "program.txt")
+    save_parts(parts_in.parts, out / "parts")
+    wrote("parts", out / "parts")
+    seg, _ids = render_segmentation(parts_in.parts, camera, palette, _seg_side(rgb))
+    (out / "seg.png").write_bytes(png_bytes(seg))
+    wrote("seg", out / "seg.png")
+
+    error: Jax3dcError | None = None
+    try:
+        if generate_structure is None:
+            if structure_model_dir is None:
+                raise InputFileError("--structure-model", "a structure model checkpoint (--structure-model DIR) is needed")
+            from eval.generation import Generator
+
+            generate_structure = structure_model(Generator.load(structure_model_dir, dtype), rgb,
+                                                 Image.fromarray(seg), max_new_tokens)
+        result.raw_text = generate_structure(result.prompt)
+        try:
+            parsed = parse_structure(result.raw_text, part_ids=parts_in.parts)
+        except StructureError as e:
+            (out / "structure_raw.txt").write_text(result.raw_text, encoding="utf-8")
+            wrote("structure_raw", out / "structure_raw.txt")
+            raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in "
+                                 f"{out / 'structure_raw.txt'})") from None
+        structure = canonicalize(parsed, boxes)
+        (out / "structure.json").write_text(to_json(structure), encoding="utf-8")
+        wrote("structure", out / "structure.json")
+        result.structure = structure
+        named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
+                                          for pid, n in structure.nodes.items()})
+        metres = scale if scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
+        for name, path in write_exports(named, parts_in.parts, out, metres).items():
+            wrote(name, path)
+        path, result.verdict = write_physics(structure, parts_in.parts, out, metres)
+        wrote("physics", path)
+    except Jax3dcError as e:
+        error = e
+    report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), result.structure,
+                          result.verdict, None if error is None else str(error))
+    for name, path in write_report(report, out).items():
+        wrote(name, path)
+    if error is not None:
+        raise error
+    return result
