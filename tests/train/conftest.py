@@ -1,0 +1,13 @@
+"""The one-device reference run that the sharded, resumed and multi-process runs are compared with."""
+
+from pathlib import Path
+
+import pytest
+
+import train_runs
+
+
+@pytest.fixture(scope="session")
+def reference_run(tmp_path_factory) -> Path:
+    """The tiny job on one device, uninterrupted: losses, checkpoints 3 and 6, hf/ export."""
+    return train_runs.train(tmp_path_factory.mktemp("reference") / "run", devices=1)
