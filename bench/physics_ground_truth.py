@@ -1,0 +1,95 @@
+"""Issue 8's accuracy targets: false alarms on ground truth and mutation detection, in one command.
+
+Ground truth is every factory category x ``--seeds`` seeds plus the PartNet-Mobility fixtures.
+Printed: the false-alarm rate over joints (target <= 2%) with the reasons of the flagged joints,
+and per mutation kind (``eval.physics.mutations``) how many motion-changing mutations are flagged
+and flagged with an expected reason (target >= 95% overall), and how many were skipped because the
+mutated joint sweeps the same poses as the original. ``--details FILE`` writes one JSON line per
+flagged ground-truth joint and per missed mutation, to find which check misses.
+
+CPU, a few minutes: python3 bench/physics_ground_truth.py --seeds 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from collections import Counter
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
+
+DEFAULT_FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "partnet_mobility"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seeds", type=int, default=1, help="seeds per factory category (default %(default)s)")
+    parser.add_argument("--categories", default="", help="comma list of factory categories (default: all)")
+    parser.add_argument("--fixtures", type=Path, default=DEFAULT_FIXTURES,
+                        help="folder of PartNet-Mobility objects (default %(default)s; '' for none)")
+    parser.add_argument("--details", type=Path, help="write flagged ground-truth joints and missed mutations (JSON lines)")
+    parser.add_argument("--no-mutations", action="store_true", help="false alarms only")
+    args = parser.parse_args()
+    warnings.filterwarnings("ignore")
+
+    from tqdm import tqdm
+
+    from data_pipeline.factories import FACTORIES
+    from eval.physics.ground_truth import factory_objects, false_alarms, imported_objects, mutation_detection
+
+    categories = [c for c in args.categories.split(",") if c] or sorted(FACTORIES)
+    fixtures = sorted(d for d in args.fixtures.iterdir() if d.is_dir()) if str(args.fixtures) and args.fixtures.is_dir() else []
+    objects = list(factory_objects(categories, range(args.seeds))) + list(imported_objects(fixtures))
+    details = open(args.details, "w") if args.details else None
+    t0 = time.perf_counter()
+
+    flagged_joints: list[str] = []
+
+    def on_truth(obj, verdict) -> None:
+        for part, joint in verdict["joints"].items():
+            if joint["reasons"]:
+                flagged_joints.append(f"  {obj.name} joint {part}: {'; '.join(joint['reasons'])}")
+                if details:
+                    details.write(json.dumps({"kind": "false alarm", "object": obj.name, "part": int(part),
+                                              "reasons": joint["reasons"]}) + "\n")
+
+    truth = false_alarms(tqdm(objects, desc="ground truth", unit="object"), on_truth)
+    print(f"\nfalse alarms: {truth['flagged']} of {truth['joints']} joints = {100 * truth['rate']:.2f}% "
+          f"(target <= 2%), {len(objects)} objects, {time.perf_counter() - t0:.0f} s")
+    for reason, n in Counter(truth["reasons"]).most_common():
+        print(f"  {n:4d}  {reason}")
+    print("\n".join(flagged_joints))
+    if args.no_mutations:
+        return
+
+    t0 = time.perf_counter()
+
+    def on_mutation(obj, mutation, verdict) -> None:
+        reasons = verdict["joints"][str(mutation.part)]["reasons"]
+        right = any(r.startswith(e) for r in reasons for e in mutation.expected)
+        if details and not right:
+            details.write(json.dumps({"kind": mutation.kind, "object": obj.name, "part": mutation.part,
+                                      "reasons": reasons}) + "\n")
+
+    per_kind = mutation_detection(tqdm(objects, desc="mutations", unit="object"), on_mutation)
+    print(f"\nmutation detection ({time.perf_counter() - t0:.0f} s): flagged with the right reason, of the "
+          "mutations that change the motion (target >= 95%)")
+    print(f"  {'kind':26s} {'total':>6s} {'flagged':>8s} {'right':>6s} {'rate':>7s} {'skipped (same motion)':>22s}")
+    sums = Counter()
+    for kind in sorted(per_kind):
+        c = Counter(per_kind[kind])
+        sums.update(c)
+        print(f"  {kind:26s} {c['total']:6d} {c['flagged']:8d} {c['right reason']:6d} "
+              f"{100 * c['right reason'] / max(c['total'], 1):6.1f}% {c['skipped (same motion)']:22d}")
+    print(f"  {'all':26s} {sums['total']:6d} {sums['flagged']:8d} {sums['right reason']:6d} "
+          f"{100 * sums['right reason'] / max(sums['total'], 1):6.1f}% {sums['skipped (same motion)']:22d}")
+    if details:
+        details.close()
+
+
+if __name__ == "__main__":
+    main()
