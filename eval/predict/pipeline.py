@@ -53,6 +53,7 @@ class PredictResult:
     out: Path
     stage1: Stage1
     camera: Camera
+    palette: np.ndarray  # this image's part colours (S and the legend)
     prompt: str
     files: dict[str, Path] = field(default_factory=dict)
     raw_text: str | None = None
@@ -73,18 +74,16 @@ def _seg_side(image: Image.Image) -> int:
     return min(max(image.width, image.height), MAX_SEG_SIDE)
 
 
-def run_stage1(stage1: str, image: Image.Image, code_model_dir: str | Path | None,
-               generate_program: TextModel | None, max_new_tokens: int, dtype: str) -> Stage1:
-    backend = parse_stage1(stage1)
-    if backend != CODE:
-        return stage1_from_mesh(backend)
+def program_text(image: Image.Image, code_model_dir: str | Path | None, generate_program: TextModel | None,
+                 max_new_tokens: int, dtype: str) -> str:
+    """The code model's part program for ``image`` (its prompt is jax3dc.prompt.CODE_PROMPT)."""
     if generate_program is None:
         if code_model_dir is None:
             raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
         from eval.generation import Generator
 
         generate_program = code_model(Generator.load(code_model_dir, dtype), image, max_new_tokens)
-    return stage1_from_program(generate_program(CODE_PROMPT))
+    return generate_program(CODE_PROMPT)
 
 
 def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
@@ -103,22 +102,27 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
+    backend = parse_stage1(stage1)
     out.mkdir(parents=True, exist_ok=True)
+    files: dict[str, Path] = {}
 
     def wrote(name: str, path: Path) -> None:
-        result.files[name] = path
+        files[name] = path
         if on_output is not None:
             on_output(name, path)
 
     rgb, digest = _image_and_digest(image)
-    parts_in = run_stage1(stage1, rgb, code_model_dir, generate_program, max_new_tokens, dtype)
+    if backend == CODE:
+        program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, dtype)
+        (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
+        wrote("program", out / "program.txt")
+        parts_in = stage1_from_program(program)
+    else:
+        parts_in = stage1_from_mesh(backend)
     palette = object_palette(PALETTE_CATEGORY, digest)
     boxes = part_boxes(parts_in.parts)
     camera = camera or default_camera(parts_in.parts)
-    result = PredictResult(out, parts_in, camera, build_prompt(boxes, palette, None))
-    if parts_in.program is not None:
-        (out / "program.txt").write_text(parts_in.program, encoding="utf-8")
-        wrote("program", out / "program.txt")
+    result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), files)
     save_parts(parts_in.parts, out / "parts")
     wrote("parts", out / "parts")
     seg, _ids = render_segmentation(parts_in.parts, camera, palette, _seg_side(rgb))
