@@ -26,21 +26,26 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--master-fp32", action="store_true", help="fp32 master weights (more memory)")
     ap.add_argument("--attention", default=None, help="jax.nn.dot_product_attention implementation, e.g. cudnn")
+    ap.add_argument("--mesh", default="1,-1,1", help="data,fsdp,tensor over all visible devices (-1: the rest)")
+    ap.add_argument("--json", help="append the figures as one JSON line to this file")
     a = ap.parse_args()
+    started = time.perf_counter()
     import jax
 
-    from train.config import TrainConfig
+    from train.config import MeshConfig, TrainConfig
     from train.loop import Trainer, make_loader
     from train.metrics_log import peak_flops
     from train.parallel import to_host
 
     cfg = TrainConfig(init=a.preset, seq_len=a.seq, batch_size=a.batch, grad_accum=1, steps=a.steps + 2,
-                      warmup_steps=1, image_size=a.image, remat=a.remat, master_fp32=a.master_fp32)
+                      warmup_steps=1, image_size=a.image, remat=a.remat, master_fp32=a.master_fp32,
+                      mesh=MeshConfig(*(int(x) for x in a.mesh.split(","))))
     trainer = Trainer(cfg, attention_impl=a.attention)
     loader = make_loader(cfg, trainer.model.config, "train", padding=False)
     batches = [next(loader) for _ in range(2)]
     for i in range(2):  # compile + warm-up
         to_host(trainer.train_step(batches[i % 2])["loss"])
+    compiled = time.perf_counter()
     t0 = time.perf_counter()
     for i in range(a.steps):
         m = trainer.train_step(batches[i % 2])
@@ -54,9 +59,18 @@ def main() -> None:
     peak = peak_flops(dev.device_kind)
     if peak:
         print(f"mfu_vs_989: {flops / peak / jax.device_count():.3f}  mfu_vs_790: {flops / 790e12 / jax.device_count():.3f}")
-    stats = dev.memory_stats() or {}
-    if "peak_bytes_in_use" in stats:
-        print(f"peak_mem_gib: {stats['peak_bytes_in_use'] / 2**30:.1f}")
+    peaks = [(d.memory_stats() or {}).get("peak_bytes_in_use", 0) / 2**30 for d in jax.local_devices()]
+    print(f"peak_mem_gib per device: max {max(peaks):.1f}")
+    if a.json:
+        import json
+
+        row = {"device": dev.device_kind, "devices": jax.device_count(), "mesh": dict(trainer.mesh.shape),
+               "preset": a.preset, "batch": a.batch, "seq": a.seq, "remat": a.remat, "step_s": dt,
+               "tokens_per_s": a.batch * a.seq / dt, "tokens_per_s_per_device": a.batch * a.seq / dt / jax.device_count(),
+               "mfu_vs_989": flops / 989e12 / jax.device_count(), "peak_mem_gib": max(peaks),
+               "setup_and_compile_s": compiled - started}
+        with open(a.json, "a") as f:
+            f.write(json.dumps(row) + "\n")
 
 
 if __name__ == "__main__":
