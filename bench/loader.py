@@ -67,7 +67,7 @@ def main() -> None:
         if data is None:
             data = os.path.join(tmp, "data")
             start = time.perf_counter()
-            build_data(Path(data), args.objects, os.cpu_count() or 1)
+            build_data(Path(data), args.objects, len(os.sched_getaffinity(0)))
             print(f"built {args.objects} objects x 2 views at 448 px in {time.perf_counter() - start:.0f} s")
         results = []
         for workers in args.workers:
@@ -78,7 +78,7 @@ def main() -> None:
                   f"{args.trainer_tokens_per_s:,.0f}), {r['row_tokens_per_s']:,.0f} row tokens/s, "
                   f"{r['batches_per_s']:.3f} batches/s, rows {100 * r['fill']:.0f}% filled, "
                   f"first batch {r['first_batch_s']} s, skipped {r['skipped']}", flush=True)
-    print(f"machine: {os.cpu_count()} CPUs; layout: {args.rows} rows x {args.seq_len} tokens, pack {args.pack}, "
+    print(f"machine: {len(os.sched_getaffinity(0))} CPUs usable; layout: {args.rows} rows x {args.seq_len} tokens, pack {args.pack}, "
           f"pixels {args.pixel_dtype}")
     if args.out:
         Path(args.out).write_text(json.dumps({"cpus": os.cpu_count(), "results": results}, indent=1))

@@ -130,3 +130,14 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("localhost", 0))
         return s.getsockname()[1]
+
+
+def saved_loader_positions(run: Path, step: int) -> dict:
+    """The loader item of a checkpoint, as saved (every process's position)."""
+    import orbax.checkpoint as ocp
+
+    manager = ocp.CheckpointManager(run / "checkpoints", item_names=("loader",))
+    try:
+        return manager.restore(step, args=ocp.args.Composite(loader=ocp.args.JsonRestore()))["loader"]
+    finally:
+        manager.close()
