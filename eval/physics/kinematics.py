@@ -50,3 +50,59 @@ def subtree_vertices_at(structure: Structure, parts: dict[int, trimesh.Trimesh],
         fractions = dict(zip(ids, rng.uniform(0.0, 1.0, len(ids))))
         out.append(posed(structure, part, vertices, fractions))
     return np.stack(out)
+
+
+SAME_MOTION_TOL_NU = 0.01  # two motions whose reachable shapes all lie this close are the same (< PENETRATION_TOL_NU: no check can tell them apart)
+SWEEP_SAMPLES = 33  # poses of one motion matched against the dense poses of the other
+
+
+def subtree_points(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int) -> np.ndarray:
+    """[n, 3] rest-pose vertices (at most SAMPLE_VERTICES per part) of ``part`` and its descendants."""
+    ids, stack = [], [part]
+    while stack:
+        p = stack.pop()
+        ids.append(p)
+        stack.extend(structure.children(p))
+    out = []
+    for p in ids:
+        v = np.asarray(parts[p].vertices, dtype=np.float64)
+        out.append(v[np.linspace(0, len(v) - 1, min(SAMPLE_VERTICES, len(v))).astype(int)])
+    return np.concatenate(out)
+
+
+def sweep_poses(joint: Joint, points: np.ndarray, count: int) -> np.ndarray:
+    """[count, n, 3] ``points`` moved by ``joint`` at ``count`` values evenly over its range."""
+    return np.stack([joint_motion(joint, v, points) for v in np.linspace(joint.range[0], joint.range[1], count)])
+
+
+def sweep_distance(a: Joint, b: Joint, points: np.ndarray, tol: float = SAME_MOTION_TOL_NU) -> float:
+    """Symmetric distance (nu) between the pose sets two joints sweep ``points`` through: the
+    farthest any pose of one sweep is from the nearest pose of the other (pose distance: the
+    largest vertex displacement). Unlike comparing state by state, a flipped axis over a range
+    symmetric about rest, or a full turn, compares equal."""
+    def dense(joint: Joint) -> int:  # enough poses that neighbours differ by at most tol / 2
+        lo, hi = joint.range
+        reach = float(np.max(np.linalg.norm(points - np.asarray(joint.pivot), axis=1))) if joint.type == "hinge" else 1.0
+        return int(min(2048, max(SWEEP_SAMPLES, np.ceil(abs(hi - lo) * reach / (tol / 2)) + 1)))
+
+    def directed(x: Joint, y: Joint) -> float:
+        xs, ys = sweep_poses(x, points, SWEEP_SAMPLES), sweep_poses(y, points, dense(y))
+        worst = 0.0
+        for pose in xs:
+            worst = max(worst, float(np.min(np.max(np.linalg.norm(ys - pose, axis=2), axis=1))))
+        return worst
+
+    return max(directed(a, b), directed(b, a))
+
+
+def symmetric_about(points: np.ndarray, joint: Joint, tol: float = SAME_MOTION_TOL_NU, turns: int = 7) -> bool:
+    """Whether ``points`` look the same (as a set, within ``tol``) after any turn about a hinge's
+    axis line: a round knob or wheel turned about its own axis occupies the same space."""
+    if joint.type != "hinge":
+        return False
+    from scipy.spatial import cKDTree
+    tree = cKDTree(points)
+    for angle in np.linspace(0, 2 * np.pi, turns + 2)[1:-1]:
+        if tree.query(joint_motion(joint, float(angle), points))[0].max() > tol * 2:
+            return False
+    return True
