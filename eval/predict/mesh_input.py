@@ -6,6 +6,12 @@ Two layouts are read (SPEC §1):
 * Wavefront OBJ with groups (``g``) or objects (``o``): each group is one part. trimesh merges OBJ
   groups into one mesh, so the few OBJ statements that matter (``v``, ``f``, ``g``, ``o``) are read
   here; texture and normal indices (``f 1/2/3``) are ignored, polygons are fanned into triangles.
+  A file with ``o`` lines has one part per object and its ``g`` lines are ignored (Blender writes
+  ``o name`` per object, then optional ``g`` groups inside it, e.g. one per material).
+
+Up axis: our frame is +Z up with the front at -Y. A file made with +Y up (glTF's convention, which
+Blender's glTF exporter follows) is read with ``up="y"``: (x, y, z) -> (x, -z, y), so its +Y becomes
++Z and its front (+Z) becomes -Y.
 
 Part ids: when every part name is a positive integer, the names are the ids (a mesh written by
 this project, or by a tool told to name parts by id, round-trips unchanged). Otherwise parts are
@@ -21,8 +27,11 @@ import numpy as np
 import trimesh
 
 from jax3dc.errors import InputFileError
+from jax3dc.palette import PALETTE_SIZE
 
 MESH_SUFFIXES: tuple[str, ...] = (".glb", ".gltf", ".obj")
+UP_AXES: tuple[str, ...] = ("z", "y")
+Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # a proper rotation (det 1)
 
 
 def natural_key(name: str) -> list:
@@ -31,9 +40,10 @@ def natural_key(name: str) -> list:
 
 
 def number_parts(named: dict[str, trimesh.Trimesh]) -> tuple[dict[int, trimesh.Trimesh], dict[int, str]]:
-    """(part id -> mesh, part id -> source name): integer names are the ids (and no names are kept),
-    else parts are numbered 1..K in natural name order."""
-    if all(n.isascii() and n.isdigit() and int(n) >= 1 for n in named) and len({int(n) for n in named}) == len(named):
+    """(part id -> mesh, part id -> source name): integer names (1..PALETTE_SIZE) are the ids (and
+    no names are kept), else parts are numbered 1..K in natural name order."""
+    if (all(n.isascii() and n.isdigit() and 1 <= int(n) <= PALETTE_SIZE for n in named)
+            and len({int(n) for n in named}) == len(named)):
         order = sorted(named, key=int)
         return {int(n): named[n] for n in order}, {}  # the names are the ids: nothing more to keep
     order = sorted(named, key=natural_key)
@@ -69,6 +79,7 @@ def read_obj_groups(path: Path) -> dict[str, trimesh.Trimesh]:
     vertices: list[list[float]] = []
     faces: dict[str, list[list[int]]] = {}
     group = "default"
+    part_statements = ("o",) if re.search(r"^[ \t]*o[ \t]", text, flags=re.MULTILINE) else ("g",)
     for number, raw in enumerate(text.splitlines(), start=1):
         fields = raw.split("#", 1)[0].split()
         if not fields:
@@ -80,7 +91,7 @@ def read_obj_groups(path: Path) -> dict[str, trimesh.Trimesh]:
                 raise InputFileError(path, f"line {number}: bad vertex {raw.strip()!r}") from None
             if len(vertices[-1]) != 3:
                 raise InputFileError(path, f"line {number}: a vertex needs 3 coordinates")
-        elif fields[0] in ("g", "o"):
+        elif fields[0] in part_statements:
             group = " ".join(fields[1:]) or "default"
         elif fields[0] == "f":
             if len(fields) < 4:
@@ -122,8 +133,13 @@ def read_gltf_nodes(path: Path) -> dict[str, trimesh.Trimesh]:
     return out
 
 
-def load_segmented_mesh(path: str | Path) -> tuple[dict[int, trimesh.Trimesh], dict[int, str]]:
-    """(part id -> mesh in the file's frame and units, part id -> the part's name in the file)."""
+def load_segmented_mesh(path: str | Path, up: str = "z") -> tuple[dict[int, trimesh.Trimesh], dict[int, str]]:
+    """(part id -> mesh in the file's units, turned to +Z up; part id -> the part's name in the file).
+
+    ``up``: the file's up axis, "z" (ours, and what jax3dc's exports write) or "y" (glTF's).
+    """
+    if up not in UP_AXES:
+        raise ValueError(f"up must be one of {UP_AXES}, got {up!r}")
     path = Path(path)
     if not path.is_file():
         raise InputFileError(path, "mesh file not found")
@@ -131,4 +147,10 @@ def load_segmented_mesh(path: str | Path) -> tuple[dict[int, trimesh.Trimesh], d
     if suffix not in MESH_SUFFIXES:
         raise InputFileError(path, f"unsupported mesh format {suffix or '(none)'}; use one of {', '.join(MESH_SUFFIXES)}")
     named = read_obj_groups(path) if suffix == ".obj" else read_gltf_nodes(path)
+    if len(named) > PALETTE_SIZE:
+        raise InputFileError(path, f"the mesh has {len(named)} parts; at most {PALETTE_SIZE} are supported "
+                                   "(one segmentation colour per part)")
+    if up == "y":
+        named = {name: trimesh.Trimesh(np.asarray(mesh.vertices) @ Y_UP_TO_Z_UP.T, mesh.faces, process=False)
+                 for name, mesh in named.items()}
     return number_parts(named)
