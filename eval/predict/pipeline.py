@@ -4,7 +4,7 @@ Steps, each writing its outputs into ``out`` as soon as they exist, so that a fa
 leaves every output made before it (and the report says what failed):
   1. image I (any image Pillow reads) and the palette of this image (seeded from its bytes);
   2. stage 1: part meshes (code model -> part program -> interpreter, or a segmented mesh file)
-     -> parts/ (+ program.txt for the code backend);
+     -> parts/ (+ program.txt for the code backend) and the stage-2 prompt -> prompt.txt;
   3. S rendered from the image's camera -> seg.png;
   4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
      canonical); invalid output -> structure_raw.txt and a StructureError;
@@ -123,6 +123,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     boxes = part_boxes(parts_in.parts)
     camera = camera or default_camera(parts_in.parts)
     result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), files)
+    (out / "prompt.txt").write_text(result.prompt, encoding="utf-8")
+    wrote("prompt", out / "prompt.txt")
     save_parts(parts_in.parts, out / "parts")
     wrote("parts", out / "parts")
     seg, _ids = render_segmentation(parts_in.parts, camera, palette, _seg_side(rgb))

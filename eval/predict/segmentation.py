@@ -5,6 +5,10 @@ build`` stores in a record's meta: ``{"lookat": [x, y, z], "distance": d, "azimu
 "elevation": deg}``. Without one, the default looks at the object's centre from the front
 (azimuth 90 looks along +Y, at the -Y front) and slightly above, far enough that the whole object
 fits the 45-degree view, like the dataset's cameras.
+
+The renderer's field of view is MuJoCo's default, 45 degrees vertical; a camera that says otherwise
+(``"fovy"``) is refused rather than rendered wrong. A non-square image gets a non-square S with the
+same vertical field of view (as MuJoCo and the image's camera both keep it), never a square S.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from data_pipeline.render import Camera, Lighting, PartRenderer, paint_segmentat
 from jax3dc.errors import InputFileError
 from jax3dc.geometry.parts import parts_bounds
 
+FOVY_DEGREES = 45.0  # MuJoCo's default vertical field of view: the only one rendered here
 DEFAULT_AZIMUTH = 90.0
 DEFAULT_ELEVATION = -20.0
 FIT_MARGIN = 1.07  # the middle of the dataset's distance jitter (1.0 .. 1.15)
@@ -51,6 +56,14 @@ def camera_from_dict(doc: Any, where: str) -> Camera:
         raise InputFileError(where, "camera lookat must be 3 finite numbers and distance/azimuth/elevation finite")
     if values[0] <= 0:
         raise InputFileError(where, "camera distance must be positive")
+    if "fovy" in doc:
+        try:
+            fovy = float(doc["fovy"])
+        except (TypeError, ValueError):
+            raise InputFileError(where, "camera fovy must be a number of degrees") from None
+        if fovy != FOVY_DEGREES:
+            raise InputFileError(where, f"camera fovy {fovy:g} is not supported: S is rendered with MuJoCo's "
+                                        f"{FOVY_DEGREES:g}-degree vertical field of view")
     return Camera(lookat=lookat, distance=values[0], azimuth=values[1], elevation=values[2])
 
 
@@ -68,18 +81,28 @@ def load_camera(path: str | Path) -> Camera:
     return camera_from_dict(doc, str(path))
 
 
-def render_part_ids(parts: Mapping[int, trimesh.Trimesh], camera: Camera, size: int) -> np.ndarray:
-    """Part id per pixel [size, size] (0 = background) of the parts at rest seen from ``camera``."""
+def render_part_ids(parts: Mapping[int, trimesh.Trimesh], camera: Camera, size: int,
+                    height: int | None = None) -> np.ndarray:
+    """Part id per pixel [height, size] (0 = background; height defaults to size) of the parts at
+    rest seen from ``camera``."""
+    import mujoco  # after data_pipeline.render has chosen the GL backend
+
+    height = size if height is None else height
     grey = {pid: (0.7, 0.7, 0.7, 1.0) for pid in parts}
-    renderer = PartRenderer(dict(parts), grey, _FLAT, size)
+    renderer = PartRenderer(dict(parts), grey, _FLAT, max(size, height))
     try:
+        if height != size:
+            # PartRenderer draws squares; its offscreen buffer (the longer side) also holds a
+            # size x height view, which MuJoCo draws with the same vertical field of view.
+            renderer.renderer.close()
+            renderer.renderer = mujoco.Renderer(renderer.model, height, size)
         return renderer.render({}, camera)[1]
     finally:
         renderer.close()
 
 
 def render_segmentation(parts: Mapping[int, trimesh.Trimesh], camera: Camera, palette: np.ndarray,
-                        size: int) -> tuple[np.ndarray, np.ndarray]:
-    """(S as RGB uint8 [size, size, 3], part ids [size, size])."""
-    ids = render_part_ids(parts, camera, size)
+                        size: int, height: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(S as RGB uint8 [height, size, 3], part ids [height, size]); height defaults to size."""
+    ids = render_part_ids(parts, camera, size, height)
     return paint_segmentation(ids, palette), ids

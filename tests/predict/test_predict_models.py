@@ -1,0 +1,88 @@
+"""The model plumbing of `predict` with a tiny random Qwen3-VL checkpoint (real tokenizer).
+
+Its output is garbage, so the structure model's text is an invalid structure and the code
+model's text an invalid program: both must end in the typed errors with the raw text kept. The
+in-memory (I, S) generation must give exactly what eval.generation gives for the same images and
+prompt in a Record. (The test with tiny *trained* models is the lead's.)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+from PIL import Image
+
+from predict_cases import CAMERA, write_glb, write_image
+
+MAX_NEW_TOKENS = 4
+
+
+@pytest.fixture(scope="module")
+def checkpoint(tmp_path_factory) -> Path:
+    from flax import nnx
+
+    from jax3dc.model.chat import VL_CHAT_TEMPLATE
+    from jax3dc.model.config import Qwen3VLConfig
+    from jax3dc.model.params import save_pretrained
+    from jax3dc.model.processor import ImageProcessorConfig
+    from jax3dc.model.qwen3_vl import Qwen3VL
+    from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS, load_tokenizer
+
+    config = dataclasses.replace(
+        Qwen3VLConfig.tiny(vocab_size=151936, tie_word_embeddings=True),
+        image_token_id=QWEN_VL_SPECIAL_IDS["<|image_pad|>"], video_token_id=151656,
+        vision_start_token_id=QWEN_VL_SPECIAL_IDS["<|vision_start|>"],
+        vision_end_token_id=QWEN_VL_SPECIAL_IDS["<|vision_end|>"])
+    path = tmp_path_factory.mktemp("tiny_checkpoint")
+    save_pretrained(Qwen3VL(config, rngs=nnx.Rngs(0)), config, path)
+    load_tokenizer().save_pretrained(path, chat_template=VL_CHAT_TEMPLATE)
+    ImageProcessorConfig(patch_size=config.vision.patch_size, merge_size=config.vision.spatial_merge_size,
+                         min_pixels=16 * 16, max_pixels=32 * 32).save_pretrained(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("inputs")
+    return write_image(folder / "image.png"), write_glb(folder / "object.glb")
+
+
+@pytest.mark.slow
+def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_path):
+    import jax
+
+    from data_pipeline.record import Record
+    from eval.generation import Generator
+    from eval.predict.models import generate_text
+    from eval.predict.pipeline import predict
+    from jax3dc.errors import StructureError
+    from jax3dc.prompt import chat_messages
+
+    out = tmp_path / "out"
+    with pytest.raises(StructureError):  # a random model does not write a valid structure
+        predict(inputs[0], f"mesh:{inputs[1]}", checkpoint, out=out, camera=CAMERA,
+                max_new_tokens=MAX_NEW_TOKENS, dtype="float32")
+    raw = (out / "structure_raw.txt").read_text()
+    assert (out / "report.html").exists() and not (out / "structure.json").exists()
+
+    generator = Generator.load(checkpoint, dtype="float32")
+    image, seg = Image.open(inputs[0]).convert("RGB"), Image.open(out / "seg.png").convert("RGB")
+    text = (out / "prompt.txt").read_text()
+    with jax.default_matmul_precision("highest"):
+        alone = generate_text(generator, [image, seg], chat_messages(text), MAX_NEW_TOKENS)
+        record = Record("x", inputs[0].read_bytes(), (out / "seg.png").read_bytes(), text, "")
+        batched = generator.generate_batch([generator.prompt(record)], 1, MAX_NEW_TOKENS, bucket=1)[0][0]
+    assert alone == batched == raw
+
+
+@pytest.mark.slow
+def test_code_model_garbage_is_a_program_error_with_the_program_kept(checkpoint, inputs, tmp_path):
+    from eval.predict.pipeline import predict
+    from jax3dc.errors import ProgramError
+
+    with pytest.raises(ProgramError):
+        predict(inputs[0], "code", checkpoint, checkpoint, out=tmp_path, max_new_tokens=MAX_NEW_TOKENS,
+                dtype="float32")
+    assert (tmp_path / "program.txt").exists()

@@ -1,0 +1,50 @@
+"""S of a non-square image: its own aspect with the camera's 45-degree vertical field of view.
+
+References: a pinhole projection of the object's vertices (eval.overlay.project, independent of
+MuJoCo), and the square dataset render, whose central columns a same-height view must reproduce.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from eval.overlay import project
+from eval.predict.segmentation import camera_from_dict, render_part_ids
+from jax3dc.errors import InputFileError
+from predict_cases import CAMERA, factory_object
+
+
+def silhouette_box(ids: np.ndarray) -> np.ndarray:
+    rows, cols = np.nonzero(ids)
+    return np.array([cols.min(), rows.min(), cols.max() + 1, rows.max() + 1], dtype=np.float64)
+
+
+@pytest.mark.parametrize("width, height", [(96, 64), (64, 96)])
+def test_silhouette_matches_a_pinhole_projection(width, height):
+    parts = factory_object().parts
+    ids = render_part_ids(parts, CAMERA, width, height)
+    assert ids.shape == (height, width)
+    vertices = np.concatenate([np.asarray(m.vertices) for m in parts.values()])
+    uv = project(vertices, CAMERA.to_dict(), (width, height))
+    want = np.array([*uv.min(axis=0), *uv.max(axis=0)])
+    np.testing.assert_allclose(silhouette_box(ids), want, atol=1.5)
+
+
+def test_same_height_views_share_the_central_columns():
+    parts = factory_object().parts
+    square = render_part_ids(parts, CAMERA, 64)
+    wide = render_part_ids(parts, CAMERA, 96, 64)
+    tall = render_part_ids(parts, CAMERA, 64, 96)
+    assert np.mean(wide[:, 16:80] == square) > 0.995
+    assert np.mean(tall[16:80, :] == render_part_ids(parts, CAMERA, 96)[16:80, 16:80]) > 0.995
+    assert np.count_nonzero(wide) > np.count_nonzero(square) * 0.99  # nothing lost off the sides
+
+
+def test_camera_fovy_other_than_45_is_refused():
+    doc = CAMERA.to_dict()
+    assert camera_from_dict({**doc, "fovy": 45}, "cam.json") == camera_from_dict(doc, "cam.json")
+    with pytest.raises(InputFileError, match="fovy 60"):
+        camera_from_dict({**doc, "fovy": 60}, "cam.json")
+    with pytest.raises(InputFileError, match="fovy must be a number"):
+        camera_from_dict({**doc, "fovy": "wide"}, "cam.json")

@@ -1,0 +1,57 @@
+"""report.html / report.png: the image, S, every part (id, name, colour) with its joint, and the verdict."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from PIL import Image
+
+from eval.predict import predict
+from eval.predict.report import PANEL
+from jax3dc.palette import hex_colour, part_colour
+from predict_cases import factory_object, target_json, write_image
+
+
+@pytest.fixture(scope="module")
+def code_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("code_run")
+    return predict(write_image(folder / "image.png"), "code", out=folder / "out",
+                   generate_program=lambda prompt: factory_object().program_text,
+                   generate_structure=lambda prompt: target_json())
+
+
+def test_html_names_every_part_with_its_colour_and_joint(code_run):
+    page = (code_run.out / "report.html").read_text()
+    structure = code_run.structure
+    for pid, name in factory_object().names.items():
+        item = re.search(rf'<li[^>]*><span class="sw" style="background:(#[0-9a-f]{{6}})"></span>{pid} {name}\b[^<]*</li>',
+                         page)
+        assert item, (pid, name)
+        assert item.group(1) == hex_colour(part_colour(code_run.palette, pid))
+        joint = structure.nodes[pid].joint
+        if joint is None:
+            assert " axis " not in item.group(0)
+        else:
+            assert f"{joint.type} axis" in item.group(0) and "physics: ok" in item.group(0)
+    assert "physics: PASS" in page
+    assert page.count("data:image/png;base64,") == 2  # I and S are embedded: the page stands alone
+
+
+def test_tree_indents_children_under_their_parents(code_run):
+    page = (code_run.out / "report.html").read_text()
+    depth = {int(pid): float(em) for em, pid in re.findall(r'margin-left:([\d.]+)em"><span[^>]*></span>(\d+) ', page)}
+    structure = code_run.structure
+    assert set(depth) == set(structure.nodes)
+    for pid, node in structure.nodes.items():
+        assert depth[pid] == (0.0 if node.parent is None else depth[node.parent] + 1.5)
+
+
+def test_png_has_image_seg_and_text_panels(code_run):
+    with Image.open(code_run.out / "report.png") as image:
+        assert image.width > 2 * PANEL and image.height >= PANEL
+        rgb = image.convert("RGB")
+        # S panel: every visible part's colour appears
+        colours = {c for _, c in rgb.crop((PANEL, 0, 2 * PANEL, PANEL)).getcolors(maxcolors=1 << 16)}
+    visible = [pid for pid in factory_object().parts if part_colour(code_run.palette, pid) in colours]
+    assert len(visible) >= 3
