@@ -37,7 +37,7 @@ def test_same_height_views_share_the_central_columns():
     wide = render_part_ids(parts, CAMERA, 96, 64)
     tall = render_part_ids(parts, CAMERA, 64, 96)
     assert np.mean(wide[:, 16:80] == square) > 0.995
-    assert np.mean(tall[16:80, :] == render_part_ids(parts, CAMERA, 96)[16:80, 16:80]) > 0.995
+    assert np.mean(tall == render_part_ids(parts, CAMERA, 96)[:, 16:80]) > 0.995
     assert np.count_nonzero(wide) > np.count_nonzero(square) * 0.99  # nothing lost off the sides
 
 
