@@ -39,7 +39,8 @@ class TextAttention(nnx.Module):
         q = apply_rotary(self.q_norm(self.q_proj(x)), cos, sin)
         k = apply_rotary(self.k_norm(self.k_proj(x)), cos, sin)
         v = self.v_proj(x)
-        q = constrain(q, ("batch", "length", "act_heads", None))
+        # q, k and v sharded alike: cuDNN's partitioner refuses mixed shardings on a mesh
+        q, k, v = (constrain(t, ("batch", "length", "act_heads", None)) for t in (q, k, v))
         if cache is not None:
             k_all = jax.lax.dynamic_update_slice_in_dim(cache[0], k.astype(cache[0].dtype), write_index, axis=1)
             v_all = jax.lax.dynamic_update_slice_in_dim(cache[1], v.astype(cache[1].dtype), write_index, axis=1)
