@@ -40,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"{name:<{width}} {path}", flush=True)
 
     result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
-                     scale=args.scale, max_new_tokens=args.max_new_tokens, dtype=args.dtype, on_output=show)
+                     scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype, on_output=show)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
     print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check {verdict} (see physics.json)")
@@ -62,6 +62,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--scale", type=float, metavar="M_PER_NU",
                    help="metres per normalised unit for the exports (default: the mesh file's units, "
                         "taken as metres; 1.0 for --stage1 code)")
+    p.add_argument("--mesh-up", choices=("z", "y"), default="z",
+                   help="up axis of the --stage1 mesh file: z (this project's frame, +Z up, front -Y; what "
+                        "jax3dc exports write; the default) or y (glTF's convention, +Y up, front +Z, e.g. Blender's "
+                        "glTF exporter)")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
                    help="model compute dtype (float32 on CPU is slower but exact)")
     p.set_defaults(func=run)

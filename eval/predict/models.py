@@ -28,7 +28,8 @@ DEFAULT_MAX_NEW_TOKENS = 2048
 
 def generate_text(generator: Generator, images: Sequence[Image.Image], messages: list[dict],
                   max_new_tokens: int) -> str:
-    """Greedy generation for one chat whose image items are ``images``, in order."""
+    """The model's reply (greedy, without the end-of-turn token) to one chat whose image items are
+    ``images``, in order."""
     processed = preprocess_images(list(images), generator.processor)
     chat = encode_chat(generator.tokenizer, messages, processed.image_grid_thw,
                        generator.config.vision.spatial_merge_size, add_generation_prompt=True)
@@ -39,8 +40,10 @@ def generate_text(generator: Generator, images: Sequence[Image.Image], messages:
     special = generator.tokenizer.special
     config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext)
     out = decode(generator.model, prefilled, config)
-    length = int(np.asarray(out.lengths)[0])
-    return generator.tokenizer.decode(np.asarray(out.tokens)[0, :length].tolist())
+    tokens = np.asarray(out.tokens)[0, :int(np.asarray(out.lengths)[0])].tolist()
+    if tokens and tokens[-1] in special.stop_ids:
+        tokens = tokens[:-1]  # the end-of-turn marker is not part of the reply (a program would not parse)
+    return generator.tokenizer.decode(tokens)
 
 
 def structure_model(generator: Generator, image: Image.Image, seg: Image.Image, max_new_tokens: int) -> TextModel:

@@ -27,6 +27,7 @@ import numpy as np
 from PIL import Image
 
 from data_pipeline.render import Camera, png_bytes
+from eval.metrics.cases import json_text
 from eval.predict.models import DEFAULT_MAX_NEW_TOKENS, TextModel, code_model, structure_model
 from eval.predict.outputs import write_exports, write_physics
 from eval.predict.report import ReportInputs, write_report
@@ -39,7 +40,7 @@ from jax3dc.palette import object_palette
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
 
-MAX_SEG_SIDE = 1024  # px; S is square, at the image's larger side up to this
+MAX_SEG_SIDE = 1024  # px; S has the image's size and aspect, its longer side at most this
 PALETTE_CATEGORY = "image"  # palette seed: "image/<sha256 of the image>", the same image gets the same colours
 
 OutputListener = Callable[[str, Path], None]
@@ -70,8 +71,10 @@ def _image_and_digest(image: str | Path | Image.Image) -> tuple[Image.Image, str
     return rgb, hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _seg_side(image: Image.Image) -> int:
-    return min(max(image.width, image.height), MAX_SEG_SIDE)
+def seg_size(image: Image.Image) -> tuple[int, int]:
+    """(width, height) of S: the image's, shrunk so the longer side is at most MAX_SEG_SIDE."""
+    shrink = min(1.0, MAX_SEG_SIDE / max(image.width, image.height))
+    return max(1, round(image.width * shrink)), max(1, round(image.height * shrink))
 
 
 def program_text(image: Image.Image, code_model_dir: str | Path | None, generate_program: TextModel | None,
@@ -89,7 +92,7 @@ def program_text(image: Image.Image, code_model_dir: str | Path | None, generate
 def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
             code_model_dir: str | Path | None = None, out: str | Path = "prediction", camera: Camera | None = None,
             generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
-            scale: float | None = None, max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS, dtype: str = "bfloat16",
+            scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS, dtype: str = "bfloat16",
             on_output: OutputListener | None = None) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
@@ -99,6 +102,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     text, seeing I) replace them. ``camera``: the image's camera in the normalised frame (default:
     a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
     file's units per nu, assumed metres; 1.0 for the code backend, whose programs are in nu).
+    ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
@@ -118,7 +122,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
         wrote("program", out / "program.txt")
         parts_in = stage1_from_program(program)
     else:
-        parts_in = stage1_from_mesh(backend)
+        parts_in = stage1_from_mesh(backend, mesh_up)
     palette = object_palette(PALETTE_CATEGORY, digest)
     boxes = part_boxes(parts_in.parts)
     camera = camera or default_camera(parts_in.parts)
@@ -127,7 +131,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     wrote("prompt", out / "prompt.txt")
     save_parts(parts_in.parts, out / "parts")
     wrote("parts", out / "parts")
-    seg, _ids = render_segmentation(parts_in.parts, camera, palette, _seg_side(rgb))
+    width, height = seg_size(rgb)
+    seg, _ids = render_segmentation(parts_in.parts, camera, palette, width, height=height)
     (out / "seg.png").write_bytes(png_bytes(seg))
     wrote("seg", out / "seg.png")
 
@@ -142,7 +147,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
                                                  Image.fromarray(seg), max_new_tokens)
         result.raw_text = generate_structure(result.prompt)
         try:
-            parsed = parse_structure(result.raw_text, part_ids=parts_in.parts)
+            parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
         except StructureError as e:
             (out / "structure_raw.txt").write_text(result.raw_text, encoding="utf-8")
             wrote("structure_raw", out / "structure_raw.txt")

@@ -54,8 +54,9 @@ def _normalised(parts: dict[int, trimesh.Trimesh], where: str) -> tuple[dict[int
         raise InputFileError(where, str(e)) from None
 
 
-def stage1_from_mesh(path: str | Path) -> Stage1:
-    parts, names = load_segmented_mesh(path)
+def stage1_from_mesh(path: str | Path, up: str = "z") -> Stage1:
+    """Parts of a segmented mesh file whose up axis is ``up`` ("z", ours, or "y", glTF's)."""
+    parts, names = load_segmented_mesh(path, up=up)
     normalised, scale = _normalised(parts, str(path))
     return Stage1(normalised, names, scale, str(path))
 

@@ -98,3 +98,15 @@ def test_empty_or_unreadable_glb_is_an_input_error(tmp_path):
 def write_text(path, text):
     path.write_text(text)
     return path
+
+
+def test_own_glb_export_reads_back_with_the_same_ids(tmp_path):
+    from eval.predict import predict
+    from predict_cases import CAMERA, target_json, write_image
+
+    first = predict(write_image(tmp_path / "image.png"), f"mesh:{write_glb(tmp_path / 'object.glb')}",
+                    out=tmp_path / "first", camera=CAMERA, generate_structure=lambda prompt: target_json())
+    again = stage1_from_mesh(first.out / "object.glb")
+    assert sorted(again.parts) == sorted(first.stage1.parts)
+    for pid, mesh in first.stage1.parts.items():
+        np.testing.assert_allclose(again.parts[pid].bounds, mesh.bounds, atol=1e-4)

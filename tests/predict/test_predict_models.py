@@ -74,7 +74,8 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
         alone = generate_text(generator, [image, seg], chat_messages(text), MAX_NEW_TOKENS)
         record = Record("x", inputs[0].read_bytes(), (out / "seg.png").read_bytes(), text, "")
         batched = generator.generate_batch([generator.prompt(record)], 1, MAX_NEW_TOKENS, bucket=1)[0][0]
-    assert alone == batched == raw
+    assert alone == raw
+    assert batched in (alone, alone + "<|im_end|>", alone + "<|endoftext|>")  # eval keeps the stop token
 
 
 @pytest.mark.slow

@@ -86,3 +86,16 @@ def test_code_backend_runs_the_program_into_named_parts(tmp_path):
     assert sorted(result.stage1.parts) == sorted(obj.parts)
     assert mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "object.xml")).njnt == len(obj.structure.joints())
     assert np.unique(png_array((tmp_path / "out" / "seg.png").read_bytes()).reshape(-1, 3), axis=0).shape[0] >= 3
+
+
+def test_fenced_reply_with_end_marker_parses_and_seg_has_the_image_size(tmp_path):
+    from PIL import Image
+
+    wide = tmp_path / "wide.png"
+    Image.new("RGB", (120, 80), (40, 40, 40)).save(wide)
+    reply = "```json\n" + target_json() + "\n```<|im_end|>"
+    result = predict(wide, f"mesh:{write_glb(tmp_path / 'object.glb')}", out=tmp_path / "out", camera=CAMERA,
+                     generate_structure=lambda prompt: reply)
+    assert (tmp_path / "out" / "structure.json").read_text() == target_json()
+    assert result.raw_text == reply
+    assert png_array((tmp_path / "out" / "seg.png").read_bytes()).shape == (80, 120, 3)
