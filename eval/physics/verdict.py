@@ -1,6 +1,7 @@
 """Per-joint and per-object verdicts from the check results (pure numpy over the batched tables).
 
 Reasons are short stable strings: "penetrates parent at rest", "penetrates part P at q=V",
+"penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part),
 "detached from parent at q=V", "pivot detached", "limit unreachable: lo|hi", and object-level
 "rest interpenetration: parts A,B" (fails the object), "combination interpenetration: parts A,B"
 (reported only), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
@@ -87,6 +88,8 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
     # pairs already deeper than the sweep tolerance at rest are the rest check's business (at its own tolerance)
     rest_deep = distances[0] < -PENETRATION_TOL_NU * scale
     pen = (distances < -PENETRATION_TOL_NU * scale) & distinct[None] & ~rest_deep[None]
+    # the joint that moves a body's rigid group (None: the group of a root)
+    joint_of_group = {sim.part_body[p]: k for k, p in enumerate(sim.joint_parts)}
     for k, part in enumerate(sim.joint_parts):
         unit = 1.0 if sim.joint_type[k] == "hinge" else scale
         moved = sim.moved_by[k]
@@ -105,6 +108,16 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
                 break
         if hit:
             reasons[part].append(hit)
+        # a jointed part that this sweep runs into is at fault too: it stays put while the part
+        # it should move with (a handle on a door, given the wrong parent) swings through it
+        for s in rows:
+            for a, b in np.argwhere(pen[s] & across):
+                other = b if moved[a] else a
+                k2 = joint_of_group.get(int(group[other]))
+                hurt = None if k2 is None or sim.moved_by[k2][child] else sim.joint_parts[k2]  # not an ancestor
+                if hurt is not None and not any(r.startswith("penetrates part") for r in reasons[hurt]):
+                    reasons[hurt].append(f"penetrates part {body_part[a if other == b else b]} "
+                                         f"while joint {part} moves (q={states.value[s] / unit:.3f})")
         parent_group = group == group[parent]
         for s in rows:
             near = proximity[s][np.ix_(moved, parent_group)]
