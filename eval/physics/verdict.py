@@ -18,7 +18,8 @@ from eval.physics import cpu_backend
 from eval.physics.dynamics import gravity, reachability, tolerated_pairs
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
-from eval.physics.tolerances import ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_PENETRATION_TOL_NU
+from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_PENETRATION_TOL_NU,
+                                     SLIDE_GUIDE_OVERLAP_NU)
 from jax3dc.structure.schema import Structure
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
@@ -124,6 +125,11 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
             if not np.any(near < DETACH_TOL_NU * scale):
                 reasons[part].append(f"detached from parent at q={states.value[s] / unit:.3f}")
                 break
+        if sim.joint_type[k] == "slide" and not any(r.startswith("detached") for r in reasons[part]):
+            out = _slides_out_at(structure, parts, part, [body_part[b] for b in np.nonzero(moved)[0]],
+                                 [body_part[b] for b in np.nonzero(parent_group)[0]], states.value[rows] / scale)
+            if out is not None:
+                reasons[part].append(f"detached from parent (slides out of its guide) at q={out:.3f}")
         if not _pivot_attached(structure, parts, part):
             reasons[part].append("pivot detached")
     combos = states.joint == -2
@@ -148,6 +154,30 @@ def _pair_of(reason: str) -> set[tuple[int, int]]:
 
 def _nearest_rest_first(rows: np.ndarray, values: np.ndarray, rest: float) -> np.ndarray:
     return rows[np.argsort(np.abs(values[rows] - rest), kind="stable")]
+
+
+def _slides_out_at(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int, moved: list[int],
+                   holders: list[int], values_nu: np.ndarray) -> float | None:
+    """The first slide value (nu, nearest rest first) at which a child that runs in a guide of its
+    parent (their extents along the slide axis overlap by at least SLIDE_GUIDE_OVERLAP_NU at rest:
+    a drawer in its carcass, a rack in its tub) no longer overlaps the parent along the axis at all.
+
+    A child that merely sits on its parent at rest (a pot lid lifted off) has no guide to leave.
+    """
+    axis = np.asarray(structure.nodes[part].joint.axis, dtype=np.float64)
+    axis /= np.linalg.norm(axis)
+
+    def extent(ids: list[int]) -> tuple[float, float]:
+        t = np.concatenate([np.asarray(parts[i].vertices, dtype=np.float64) for i in ids]) @ axis
+        return float(t.min()), float(t.max())
+
+    (clo, chi), (plo, phi) = extent(moved), extent(holders)
+    if min(chi, phi) - max(clo, plo) < SLIDE_GUIDE_OVERLAP_NU:
+        return None
+    for v in values_nu[np.argsort(np.abs(values_nu), kind="stable")]:
+        if min(chi + v, phi) - max(clo + v, plo) <= 0.0:
+            return float(v)
+    return None
 
 
 def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int) -> bool:

@@ -119,6 +119,25 @@ def test_door_swapped_to_a_slide_is_caught():
     assert any(r.startswith(e) for r in reasons for e in mutation.expected), reasons
 
 
+@pytest.mark.parametrize("category, name", [("dishwasher", "rack"), ("washing_machine", "detergent_drawer")])
+def test_rack_pulled_out_of_its_guide_is_detached(category, name):
+    # still within DETACH_TOL_NU of its parent when fully out, but no longer overlapping it along the slide
+    obj = generate_object(category, 0)
+    part = _part_named(obj, name)
+    mutation = _mutation(obj, "range doubled", part)
+    reasons = _reasons(obj, mutation)
+    assert any(r.startswith("detached from parent (slides out of its guide)") for r in reasons), reasons
+    truth = check_object(obj.structure, obj.parts, obj.scale_m_per_nu, dynamics=False)["joints"][str(part)]
+    assert truth["ok"], truth
+
+
+def test_lid_lifted_off_has_no_guide_to_leave():
+    pot = generate_object("kitchen_pot", 0)
+    lid = _part_named(pot, "lid")
+    reasons = check_object(pot.structure, pot.parts, pot.scale_m_per_nu, dynamics=False)["joints"][str(lid)]["reasons"]
+    assert not any("guide" in r for r in reasons), reasons
+
+
 # --- specific ground-truth objects pass ---------------------------------------------------------
 
 @pytest.mark.parametrize("name", ["drawer_20453", "microwave_7119"])
