@@ -40,7 +40,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"{name:<{width}} {path}", flush=True)
 
     result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
-                     scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype, on_output=show)
+                     scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
+                     on_output=show, progress=True)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
     print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check {verdict} (see physics.json)")
@@ -54,7 +55,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--stage1", required=True, metavar="code|mesh:FILE",
                    help="where the part meshes come from: `code` (the code model) or `mesh:FILE` (.glb/.gltf/.obj)")
     p.add_argument("--structure-model", metavar="DIR", help="stage-2 checkpoint folder (config.json + safetensors)")
-    p.add_argument("--code-model", metavar="DIR", help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
+    p.add_argument("--code-model", metavar="DIR",
+                   help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
     p.add_argument("--camera", metavar="FILE", help=CAMERA_HELP)
     p.add_argument("--out", required=True, metavar="DIR", help="folder for the outputs (created if missing)")
     p.add_argument("--max-new-tokens", type=int, default=DEFAULT_MAX_NEW_TOKENS, metavar="N",

@@ -121,7 +121,8 @@ def read_gltf_nodes(path: Path) -> dict[str, trimesh.Trimesh]:
         geometry = scene.geometry.get(geometry_name)
         if not isinstance(geometry, trimesh.Trimesh) or len(geometry.faces) == 0:
             continue  # point clouds, lines and empty primitives are not parts
-        mesh = trimesh.Trimesh(np.asarray(geometry.vertices, dtype=np.float64), np.asarray(geometry.faces), process=False)
+        mesh = trimesh.Trimesh(np.asarray(geometry.vertices, dtype=np.float64), np.asarray(geometry.faces),
+                               process=False)
         mesh.apply_transform(np.asarray(transform, dtype=np.float64))
         pieces.setdefault(str(node), []).append(mesh)
     if not pieces:
@@ -145,7 +146,8 @@ def load_segmented_mesh(path: str | Path, up: str = "z") -> tuple[dict[int, trim
         raise InputFileError(path, "mesh file not found")
     suffix = path.suffix.lower()
     if suffix not in MESH_SUFFIXES:
-        raise InputFileError(path, f"unsupported mesh format {suffix or '(none)'}; use one of {', '.join(MESH_SUFFIXES)}")
+        raise InputFileError(path, f"unsupported mesh format {suffix or '(none)'}; "
+                                   f"use one of {', '.join(MESH_SUFFIXES)}")
     named = read_obj_groups(path) if suffix == ".obj" else read_gltf_nodes(path)
     if len(named) > PALETTE_SIZE:
         raise InputFileError(path, f"the mesh has {len(named)} parts; at most {PALETTE_SIZE} are supported "

@@ -45,7 +45,8 @@ def _plain(value):
     return value
 
 
-def write_physics(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path, scale: float) -> tuple[Path, dict]:
+def write_physics(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path,
+                  scale: float) -> tuple[Path, dict]:
     """physics.json: the plausibility verdict (ok, per-joint reasons, checks) of the object."""
     verdict = _plain(check_object(structure, parts, scale))
     path = out / "physics.json"

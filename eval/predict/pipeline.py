@@ -25,6 +25,7 @@ from typing import Callable
 
 import numpy as np
 from PIL import Image
+from tqdm import tqdm
 
 from data_pipeline.render import Camera, png_bytes
 from eval.metrics.cases import json_text
@@ -43,6 +44,7 @@ from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
 MAX_SEG_SIDE = 1024  # px; S has the image's size and aspect, its longer side at most this
 PALETTE_CATEGORY = "image"  # palette seed: "image/<sha256 of the image>", the same image gets the same colours
 
+STEPS = ("stage 1", "segmentation", "structure model", "exports", "physics", "report")
 OutputListener = Callable[[str, Path], None]
 """Called with (what, path) as each output is written (the CLI prints them)."""
 
@@ -92,8 +94,9 @@ def program_text(image: Image.Image, code_model_dir: str | Path | None, generate
 def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
             code_model_dir: str | Path | None = None, out: str | Path = "prediction", camera: Camera | None = None,
             generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
-            scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS, dtype: str = "bfloat16",
-            on_output: OutputListener | None = None) -> PredictResult:
+            scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
+            dtype: str = "bfloat16",
+            on_output: OutputListener | None = None, progress: bool = False) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
     ``stage1``: "code" or "mesh:FILE". ``structure_model_dir`` / ``code_model_dir``: checkpoint
@@ -103,6 +106,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
     file's units per nu, assumed metres; 1.0 for the code backend, whose programs are in nu).
     ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
+    ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
@@ -115,61 +119,79 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
         if on_output is not None:
             on_output(name, path)
 
-    rgb, digest = _image_and_digest(image)
-    if backend == CODE:
-        program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, dtype)
-        (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
-        wrote("program", out / "program.txt")
-        parts_in = stage1_from_program(program)
-    else:
-        parts_in = stage1_from_mesh(backend, mesh_up)
-    palette = object_palette(PALETTE_CATEGORY, digest)
-    boxes = part_boxes(parts_in.parts)
-    camera = camera or default_camera(parts_in.parts)
-    result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), files)
-    (out / "prompt.txt").write_text(result.prompt, encoding="utf-8")
-    wrote("prompt", out / "prompt.txt")
-    save_parts(parts_in.parts, out / "parts")
-    wrote("parts", out / "parts")
-    width, height = seg_size(rgb)
-    seg, _ids = render_segmentation(parts_in.parts, camera, palette, width, height=height)
-    (out / "seg.png").write_bytes(png_bytes(seg))
-    wrote("seg", out / "seg.png")
+    bar = tqdm(total=len(STEPS), desc="predict", unit="step", leave=False,
+               disable=None if progress else True)  # None: only on a terminal
 
-    error: Jax3dcError | None = None
+    def step(name: str) -> None:
+        bar.set_postfix_str(name)
+        bar.n = STEPS.index(name)
+        bar.refresh()
+
     try:
-        if generate_structure is None:
-            if structure_model_dir is None:
-                raise InputFileError("--structure-model", "a structure model checkpoint (--structure-model DIR) is needed")
-            from eval.generation import Generator
+        step("stage 1")
+        rgb, digest = _image_and_digest(image)
+        if backend == CODE:
+            program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, dtype)
+            (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
+            wrote("program", out / "program.txt")
+            parts_in = stage1_from_program(program)
+        else:
+            parts_in = stage1_from_mesh(backend, mesh_up)
+        palette = object_palette(PALETTE_CATEGORY, digest)
+        boxes = part_boxes(parts_in.parts)
+        camera = camera or default_camera(parts_in.parts)
+        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), files)
+        (out / "prompt.txt").write_text(result.prompt, encoding="utf-8")
+        wrote("prompt", out / "prompt.txt")
+        save_parts(parts_in.parts, out / "parts")
+        wrote("parts", out / "parts")
+        step("segmentation")
+        width, height = seg_size(rgb)
+        seg, _ids = render_segmentation(parts_in.parts, camera, palette, width, height=height)
+        (out / "seg.png").write_bytes(png_bytes(seg))
+        wrote("seg", out / "seg.png")
 
-            generate_structure = structure_model(Generator.load(structure_model_dir, dtype), rgb,
-                                                 Image.fromarray(seg), max_new_tokens)
-        result.raw_text = generate_structure(result.prompt)
+        error: Jax3dcError | None = None
         try:
-            parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
-        except StructureError as e:
-            (out / "structure_raw.txt").write_text(result.raw_text, encoding="utf-8")
-            wrote("structure_raw", out / "structure_raw.txt")
-            raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in "
-                                 f"{out / 'structure_raw.txt'})") from None
-        structure = canonicalize(parsed, boxes)
-        (out / "structure.json").write_text(to_json(structure), encoding="utf-8")
-        wrote("structure", out / "structure.json")
-        result.structure = structure
-        named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
-                                          for pid, n in structure.nodes.items()})
-        metres = scale if scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
-        for name, path in write_exports(named, parts_in.parts, out, metres).items():
+            step("structure model")
+            if generate_structure is None:
+                if structure_model_dir is None:
+                    raise InputFileError("--structure-model",
+                                         "a structure model checkpoint (--structure-model DIR) is needed")
+                from eval.generation import Generator
+
+                generate_structure = structure_model(Generator.load(structure_model_dir, dtype), rgb,
+                                                     Image.fromarray(seg), max_new_tokens)
+            result.raw_text = generate_structure(result.prompt)
+            try:
+                parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
+            except StructureError as e:
+                (out / "structure_raw.txt").write_text(result.raw_text, encoding="utf-8")
+                wrote("structure_raw", out / "structure_raw.txt")
+                raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in "
+                                     f"{out / 'structure_raw.txt'})") from None
+            step("exports")
+            structure = canonicalize(parsed, boxes)
+            (out / "structure.json").write_text(to_json(structure), encoding="utf-8")
+            wrote("structure", out / "structure.json")
+            result.structure = structure
+            named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
+                                              for pid, n in structure.nodes.items()})
+            metres = scale if scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
+            for name, path in write_exports(named, parts_in.parts, out, metres).items():
+                wrote(name, path)
+            step("physics")
+            path, result.verdict = write_physics(structure, parts_in.parts, out, metres)
+            wrote("physics", path)
+        except Jax3dcError as e:
+            error = e
+        step("report")
+        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), result.structure,
+                              result.verdict, None if error is None else str(error))
+        for name, path in write_report(report, out).items():
             wrote(name, path)
-        path, result.verdict = write_physics(structure, parts_in.parts, out, metres)
-        wrote("physics", path)
-    except Jax3dcError as e:
-        error = e
-    report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), result.structure,
-                          result.verdict, None if error is None else str(error))
-    for name, path in write_report(report, out).items():
-        wrote(name, path)
+    finally:
+        bar.close()  # before the caller prints an error line
     if error is not None:
         raise error
     return result

@@ -88,7 +88,8 @@ def verdict_line(r: ReportInputs) -> str:
     if r.verdict is None:
         return "physics: not checked" + (f" ({r.error})" if r.error else "")
     problems = [f"{k}: {', '.join(map(str, v))}" for k, v in sorted(r.verdict.get("checks", {}).items()) if v]
-    return "physics: " + ("PASS" if r.verdict.get("ok") else "FAIL") + ("" if not problems else " | " + "; ".join(problems))
+    verdict = "PASS" if r.verdict.get("ok") else "FAIL"
+    return f"physics: {verdict}" + ("" if not problems else " | " + "; ".join(problems))
 
 
 def overlay_image(r: ReportInputs) -> Image.Image:

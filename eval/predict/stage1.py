@@ -44,7 +44,8 @@ def parse_stage1(spec: str) -> str | Path:
         return CODE
     if spec.startswith(MESH_PREFIX) and len(spec) > len(MESH_PREFIX):
         return Path(spec[len(MESH_PREFIX):])
-    raise InputFileError(spec, "--stage1 must be `code` or `mesh:FILE` (a GLB with one node per part, or an OBJ with groups)")
+    raise InputFileError(spec, "--stage1 must be `code` or `mesh:FILE` "
+                               "(a GLB with one node per part, or an OBJ with groups)")
 
 
 def _normalised(parts: dict[int, trimesh.Trimesh], where: str) -> tuple[dict[int, trimesh.Trimesh], float]:

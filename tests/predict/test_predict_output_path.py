@@ -68,8 +68,8 @@ def test_predict_seg_png_matches_a_direct_render(mesh_run):
 
 def test_predict_is_deterministic(mesh_run, tmp_path):
     first = mesh_run[0]
-    again = predict(first.out.parent / "image.png", f"mesh:{first.out.parent / 'object.glb'}", out=tmp_path,
-                    camera=CAMERA, generate_structure=lambda prompt: target_json())
+    predict(first.out.parent / "image.png", f"mesh:{first.out.parent / 'object.glb'}", out=tmp_path,
+            camera=CAMERA, generate_structure=lambda prompt: target_json())
     for name in ("structure.json", "seg.png", "object.xml", "object.urdf", "physics.json"):
         assert (tmp_path / name).read_bytes() == (first.out / name).read_bytes(), name
 
