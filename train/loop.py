@@ -100,7 +100,8 @@ class Trainer:
             self._train_step = make_train_step(
                 self.model.graphdef, model_state.score, self.tx, self.schedule, compute, self.mesh,
                 self.state_sharding, self.model.frozen_sharding, self._batch_shardings(g))
-        self.state, metrics = self._train_step(self.state, self.model.frozen, g)
+        with jax.set_mesh(self.mesh):  # activates the model's activation-sharding constraints
+            self.state, metrics = self._train_step(self.state, self.model.frozen, g)
         return metrics
 
     def validate(self, loader: Iterator, batches: int) -> float:
@@ -113,7 +114,8 @@ class Trainer:
                 self._eval_step = make_eval_step(
                     self.model.graphdef, model_state.score, compute, self.mesh, self.state_sharding,
                     self.model.frozen_sharding, self._batch_shardings(g))
-            n, _, s = self._eval_step(self.state.params, self.model.frozen, g)
+            with jax.set_mesh(self.mesh):
+                n, _, s = self._eval_step(self.state.params, self.model.frozen, g)
             nll += float(to_host(n))
             scored += float(to_host(s))
         return nll / max(scored, 1.0)
