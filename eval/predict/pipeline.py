@@ -139,6 +139,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
             parts_in = stage1_from_mesh(backend, mesh_up)
         palette = object_palette(PALETTE_CATEGORY, digest)
         boxes = part_boxes(parts_in.parts)
+        camera_given = camera is not None
         camera = camera or default_camera(parts_in.parts)
         result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), files)
         (out / "prompt.txt").write_text(result.prompt, encoding="utf-8")
@@ -186,8 +187,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
         except Jax3dcError as e:
             error = e
         step("report")
-        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), result.structure,
-                              result.verdict, None if error is None else str(error))
+        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), camera_given,
+                              result.structure, result.verdict, None if error is None else str(error))
         for name, path in write_report(report, out).items():
             wrote(name, path)
     finally:

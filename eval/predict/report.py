@@ -1,7 +1,8 @@
 """The one-page report of a prediction: report.html and report.png.
 
-Both show the input image I (with the predicted joints drawn over it when the camera is known),
-the segmentation S, the part tree with each part's colour, name, material and joint, and the
+Both show the input image I, the segmentation S, the predicted joints drawn over I when the
+image's camera was given (else over S, which is rendered from the camera used, so it always lines
+up), the part tree with each part's colour, name, material and joint, and the
 physics verdict. When stage 2 failed (no valid structure) they show the parts and the error, so
 the page is still useful for finding out why.
 """
@@ -36,7 +37,8 @@ class ReportInputs:
     palette: np.ndarray
     names: Mapping[int, str]
     boxes: Mapping[int, Box]
-    camera: Mapping[str, Any] | None
+    camera: Mapping[str, Any]  # the camera S was rendered from
+    camera_given: bool  # the image's own camera (joints line up with I), not the default view
     structure: Structure | None
     verdict: Mapping[str, Any] | None
     error: str | None  # why there is no structure / verdict
@@ -92,12 +94,20 @@ def verdict_line(r: ReportInputs) -> str:
     return f"physics: {verdict}" + ("" if not problems else " | " + "; ".join(problems))
 
 
-def overlay_image(r: ReportInputs) -> Image.Image:
-    """I with the predicted joints drawn (the 'reference' passed to draw_overlay has no joints)."""
-    if r.structure is None or r.camera is None or not r.structure.joints():
-        return r.image.convert("RGB")
+def panels(r: ReportInputs) -> list[tuple[str, Image.Image]]:
+    """(caption, image) of I and S, the joints drawn on I when its camera is known, else on S."""
+    image, seg = r.image.convert("RGB"), Image.fromarray(r.seg)
+    if r.structure is None or not r.structure.joints():
+        return [("image I", image), ("segmentation S", seg)]
+    if r.camera_given:
+        return [("image I with the predicted joints", joint_overlay(r, image)), ("segmentation S", seg)]
+    return [("image I", image), ("segmentation S with the predicted joints (default camera)", joint_overlay(r, seg))]
+
+
+def joint_overlay(r: ReportInputs, base: Image.Image) -> Image.Image:
+    """``base`` with the predicted joints drawn (the 'reference' passed to draw_overlay has no joints)."""
     buf = io.BytesIO()
-    r.image.convert("RGB").save(buf, format="PNG")
+    base.save(buf, format="PNG")
     bare = replace(r.structure, nodes={pid: replace(n, joint=None) for pid, n in r.structure.nodes.items()})
     return draw_overlay(buf.getvalue(), r.camera, r.boxes, bare, r.structure)
 
@@ -115,14 +125,15 @@ def write_html(r: ReportInputs, path: Path) -> Path:
         rows.append(f'<li style="margin-left:{depth * 1.5}em"><span class="sw" style="background:{colour}"></span>'
                     f"{html.escape(text)}</li>")
     error = f'<p class="err">{html.escape(r.error)}</p>' if r.error else ""
+    images = "".join(f'<figure><img alt="{html.escape(caption)}" src="{_png_data_uri(image)}">'
+                     f"<figcaption>{html.escape(caption)}</figcaption></figure>" for caption, image in panels(r))
     page = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>jax3dc prediction</title>
 <style>body{{font-family:sans-serif;margin:1.5em}} img{{width:{PANEL // 1.4:.0f}px;image-rendering:pixelated;border:1px solid #ccc}}
 .sw{{display:inline-block;width:0.9em;height:0.9em;margin-right:0.4em;border:1px solid #444;vertical-align:middle}}
-ul{{list-style:none;padding-left:0}} .err{{color:#b00}}</style></head>
+figure{{display:inline-block;margin:0 1em 0 0}} ul{{list-style:none;padding-left:0}} .err{{color:#b00}}</style></head>
 <body><h1>jax3dc prediction</h1>
-<p><img alt="image I with predicted joints" src="{_png_data_uri(overlay_image(r))}">
-<img alt="segmentation S" src="{_png_data_uri(Image.fromarray(r.seg))}"></p>
+<div>{images}</div>
 {error}<h2>Parts and joints</h2><ul>{''.join(rows)}</ul>
 <h2>Physics</h2><p>{html.escape(verdict_line(r))}</p>
 </body></html>
@@ -137,9 +148,8 @@ def _wrap(text: str, width: int) -> list[str]:
 
 def write_png(r: ReportInputs, path: Path) -> Path:
     """Image panel, S panel, and a text panel with the tree, joints and verdict."""
-    panels = [overlay_image(r), Image.fromarray(r.seg)]
-    panels = [p.convert("RGB").resize((PANEL, max(1, round(PANEL * p.height / p.width))), Image.Resampling.NEAREST)
-              for p in panels]
+    shown = [(caption, p.convert("RGB").resize((PANEL, max(1, round(PANEL * p.height / p.width))),
+                                               Image.Resampling.NEAREST)) for caption, p in panels(r)]
     font = ImageFont.load_default(size=13)
     lines: list[tuple[int, int | None, str]] = [(0, None, "jax3dc prediction")]
     if r.error:
@@ -148,12 +158,13 @@ def write_png(r: ReportInputs, path: Path) -> Path:
         for k, piece in enumerate(_wrap(text, 90 - 3 * depth)):
             lines.append((depth, pid if k == 0 else None, piece))
     lines += [(0, None, t) for t in _wrap(verdict_line(r), 90)]
-    height = max(max(p.height for p in panels), (len(lines) + 1) * LINE)
-    canvas = Image.new("RGB", (PANEL * len(panels) + TEXT_WIDTH, height), (255, 255, 255))
-    for i, p in enumerate(panels):
-        canvas.paste(p, (PANEL * i, 0))
+    height = max(max(p.height for _, p in shown) + 2 * LINE, (len(lines) + 1) * LINE)
+    canvas = Image.new("RGB", (PANEL * len(shown) + TEXT_WIDTH, height), (255, 255, 255))
     draw = ImageDraw.Draw(canvas)
-    x0 = PANEL * len(panels) + 8
+    for i, (caption, p) in enumerate(shown):
+        canvas.paste(p, (PANEL * i, 0))
+        draw.text((PANEL * i + 8, p.height + 4), caption, fill=(0, 0, 0), font=font)
+    x0 = PANEL * len(shown) + 8
     for row, (depth, pid, text) in enumerate(lines):
         y, x = 4 + row * LINE, x0 + depth * 18
         if pid is not None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
 import pytest
 from PIL import Image
 
@@ -55,3 +56,24 @@ def test_png_has_image_seg_and_text_panels(code_run):
         colours = {c for _, c in rgb.crop((PANEL, 0, 2 * PANEL, PANEL)).getcolors(maxcolors=1 << 16)}
     visible = [pid for pid in factory_object().parts if part_colour(code_run.palette, pid) in colours]
     assert len(visible) >= 3
+
+
+def test_joints_go_on_s_without_the_image_camera(code_run, tmp_path):
+    from eval.predict.report import panels
+    from predict_cases import CAMERA
+
+    captions = [caption for caption, _ in panels(_inputs(code_run, camera_given=False))]
+    assert "with the predicted joints" in captions[1] and "joints" not in captions[0]
+    captions = [caption for caption, _ in panels(_inputs(code_run, camera_given=True, camera=CAMERA.to_dict()))]
+    assert "with the predicted joints" in captions[0] and "joints" not in captions[1]
+    page = (code_run.out / "report.html").read_text()  # the code run had no --camera
+    assert "segmentation S with the predicted joints" in page
+
+
+def _inputs(result, camera_given, camera=None):
+    from eval.predict.report import ReportInputs
+    from jax3dc.geometry.parts import part_boxes
+
+    return ReportInputs(Image.open(result.out.parent / "image.png"), np.asarray(Image.open(result.out / "seg.png")),
+                        result.palette, result.stage1.names, part_boxes(result.stage1.parts),
+                        camera or result.camera.to_dict(), camera_given, result.structure, result.verdict, None)
