@@ -7,6 +7,7 @@ PENETRATION_TOL_NU = 0.025  # a contact deeper than this is interpenetration (vo
 REST_PENETRATION_TOL_NU = 0.05  # at rest: real meshes interlock at hinges (a bucket handle through its lugs)
 ATTACH_TOL_NU = 0.07  # the pivot lies within this distance of the child AND of its parent
 DETACH_TOL_NU = 0.2  # a moving child farther than this from its parent (all geoms) is detached
+LIFT_OFF_MAX_NU = 0.5  # a slide that parts a child from its parent (a lid lifted off) may open this gap (PartNet-Mobility pot lids: ~0.35)
 SLIDE_GUIDE_OVERLAP_NU = 0.05  # a slide child overlapping its parent this much along the axis at rest runs in a guide it must not leave
 LIMIT_TOL_HINGE_RAD = 0.08  # a hinge limit counts as reached within this angle
 LIMIT_TOL_SLIDE_NU = 0.03  # a slide limit counts as reached within this distance

@@ -19,7 +19,7 @@ from eval.physics.dynamics import gravity, reachability, tolerated_pairs
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
 from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_PENETRATION_TOL_NU,
-                                     SLIDE_GUIDE_OVERLAP_NU)
+                                     LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
 from jax3dc.structure.schema import Structure
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
@@ -120,16 +120,25 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
                     reasons[hurt].append(f"penetrates part {body_part[a if other == b else b]} "
                                          f"while joint {part} moves (q={states.value[s] / unit:.3f})")
         parent_group = group == group[parent]
-        for s in rows:
-            near = proximity[s][np.ix_(moved, parent_group)]
-            if not np.any(near < DETACH_TOL_NU * scale):
-                reasons[part].append(f"detached from parent at q={states.value[s] / unit:.3f}")
-                break
-        if sim.joint_type[k] == "slide" and not any(r.startswith("detached") for r in reasons[part]):
-            out = _slides_out_at(structure, parts, part, [body_part[b] for b in np.nonzero(moved)[0]],
-                                 [body_part[b] for b in np.nonzero(parent_group)[0]], states.value[rows] / scale)
-            if out is not None:
-                reasons[part].append(f"detached from parent (slides out of its guide) at q={out:.3f}")
+        overlap = None  # slides: the child's overlap with its parent along the axis, per sweep value (nu)
+        if sim.joint_type[k] == "slide":
+            overlap = _overlap_along_axis(structure, parts, part, [body_part[b] for b in np.nonzero(moved)[0]],
+                                          [body_part[b] for b in np.nonzero(parent_group)[0]])
+        values_nu = states.value[rows] / unit
+        if overlap is not None and _lifts_off(overlap, values_nu):  # a lid: parting from its parent is the motion
+            gone = [v for v in values_nu if -overlap(v) > LIFT_OFF_MAX_NU]
+            if gone:
+                reasons[part].append(f"detached from parent (lifted off too far) at q={gone[0]:.3f}")
+        else:
+            for s in rows:
+                near = proximity[s][np.ix_(moved, parent_group)]
+                if not np.any(near < DETACH_TOL_NU * scale):
+                    reasons[part].append(f"detached from parent at q={states.value[s] / unit:.3f}")
+                    break
+        if overlap is not None and overlap(0.0) >= SLIDE_GUIDE_OVERLAP_NU and not any(r.startswith("detached") for r in reasons[part]):
+            out = [v for v in values_nu if overlap(v) <= 0.0]  # a drawer or rack in its guide must stay in it
+            if out:
+                reasons[part].append(f"detached from parent (slides out of its guide) at q={out[0]:.3f}")
         if not _pivot_attached(structure, parts, part):
             reasons[part].append("pivot detached")
     combos = states.joint == -2
@@ -156,14 +165,11 @@ def _nearest_rest_first(rows: np.ndarray, values: np.ndarray, rest: float) -> np
     return rows[np.argsort(np.abs(values[rows] - rest), kind="stable")]
 
 
-def _slides_out_at(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int, moved: list[int],
-                   holders: list[int], values_nu: np.ndarray) -> float | None:
-    """The first slide value (nu, nearest rest first) at which a child that runs in a guide of its
-    parent (their extents along the slide axis overlap by at least SLIDE_GUIDE_OVERLAP_NU at rest:
-    a drawer in its carcass, a rack in its tub) no longer overlaps the parent along the axis at all.
-
-    A child that merely sits on its parent at rest (a pot lid lifted off) has no guide to leave.
-    """
+def _overlap_along_axis(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int, moved: list[int],
+                        holders: list[int]):
+    """v (nu) -> how far the moved parts' extent along the slide axis overlaps the parent group's
+    once slid by v (negative: the gap between them). A drawer in its carcass overlaps by most of
+    its depth (it runs in a guide, SLIDE_GUIDE_OVERLAP_NU); a lid sitting on its pot by about 0."""
     axis = np.asarray(structure.nodes[part].joint.axis, dtype=np.float64)
     axis /= np.linalg.norm(axis)
 
@@ -172,12 +178,13 @@ def _slides_out_at(structure: Structure, parts: dict[int, trimesh.Trimesh], part
         return float(t.min()), float(t.max())
 
     (clo, chi), (plo, phi) = extent(moved), extent(holders)
-    if min(chi, phi) - max(clo, plo) < SLIDE_GUIDE_OVERLAP_NU:
-        return None
-    for v in values_nu[np.argsort(np.abs(values_nu), kind="stable")]:
-        if min(chi + v, phi) - max(clo + v, plo) <= 0.0:
-            return float(v)
-    return None
+    return lambda v: min(chi + v, phi) - max(clo + v, plo)
+
+
+def _lifts_off(overlap, values_nu: np.ndarray) -> bool:
+    """An unguided slide that only ever parts the child from its parent (a lid lifted off a pot)."""
+    rest = overlap(0.0)
+    return rest < SLIDE_GUIDE_OVERLAP_NU and all(overlap(v) <= rest + 1e-9 for v in values_nu)
 
 
 def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int) -> bool:
