@@ -2,7 +2,8 @@
 
 Backends:
 * ``code``: a part program (written by the code model from the image, or handed in) runs in the
-  interpreter (parsed, never exec-ed) into part meshes, with semantic names and materials;
+  interpreter (parsed, never exec-ed) into part meshes with semantic names (the program's materials
+  are not used: materials are stage 2's to predict, from the image);
 * ``mesh:FILE``: a part-segmented mesh from any tool (see :mod:`eval.predict.mesh_input`).
 
 Either way the parts are then centred with largest extent 1 (``normalise_parts``); the factor is
@@ -11,7 +12,7 @@ kept as the scale (mesh: file units per nu, metres for a mesh in metres).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import trimesh
@@ -20,7 +21,6 @@ from eval.predict.mesh_input import load_segmented_mesh
 from jax3dc.errors import InputFileError, ProgramError
 from jax3dc.geometry.parts import normalise_parts
 from jax3dc.program.interpreter import run_program
-from jax3dc.structure.schema import Material
 
 CODE = "code"
 MESH_PREFIX = "mesh:"
@@ -35,7 +35,6 @@ class Stage1:
     scale: float  # source units per nu
     source: str  # "code" or the mesh file's path
     program: str | None = None
-    materials: dict[int, Material] = field(default_factory=dict)  # from a program's material=...
 
 
 def parse_stage1(spec: str) -> str | Path:
@@ -69,4 +68,4 @@ def stage1_from_program(text: str) -> Stage1:
         parts, scale = normalise_parts(result.parts)
     except ValueError as e:
         raise ProgramError(None, f"the program's parts have no normalised frame: {e}") from None
-    return Stage1(parts, dict(result.names), scale, CODE, text, dict(result.materials))
+    return Stage1(parts, dict(result.names), scale, CODE, text)

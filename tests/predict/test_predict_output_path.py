@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import json
 
-import mujoco
 import numpy as np
 import pytest
 import trimesh
 
-from data_pipeline.render import png_array
+from data_pipeline.render import mujoco, png_array  # mujoco imported after render chose the GL backend
 from eval.predict import predict
 from jax3dc.geometry.parts import load_parts
 from jax3dc.prompt import CODE_PROMPT, LEGEND_HEADER
@@ -99,3 +98,16 @@ def test_fenced_reply_with_end_marker_parses_and_seg_has_the_image_size(tmp_path
     assert (tmp_path / "out" / "structure.json").read_text() == target_json()
     assert result.raw_text == reply
     assert png_array((tmp_path / "out" / "seg.png").read_bytes()).shape == (80, 120, 3)
+
+
+def test_obj_groups_give_the_same_outputs_as_the_glb(mesh_run, tmp_path):
+    from predict_cases import write_obj_groups
+
+    first = mesh_run[0]
+    predict(first.out.parent / "image.png", f"mesh:{write_obj_groups(tmp_path / 'object.obj')}", out=tmp_path / "out",
+            camera=CAMERA, generate_structure=lambda prompt: target_json())
+    assert (tmp_path / "out" / "prompt.txt").read_text() == (first.out / "prompt.txt").read_text()
+    seg, want = (png_array((folder / "seg.png").read_bytes()) for folder in (tmp_path / "out", first.out))
+    assert np.mean(np.all(seg == want, axis=-1)) > 0.999
+    for name in ("structure.json", "physics.json"):
+        assert (tmp_path / "out" / name).read_text() == (first.out / name).read_text(), name
