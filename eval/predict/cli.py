@@ -1,4 +1,4 @@
-"""`jax3dc predict IMAGE --stage1 code|mesh:FILE --structure-model DIR [--code-model DIR] --out DIR`."""
+"""`jax3dc predict IMAGE --stage1 code|mesh:FILE|parts:DIR --structure-model DIR [--code-model DIR] --out DIR`."""
 
 from __future__ import annotations
 
@@ -13,14 +13,16 @@ Predict the articulated structure of the object in IMAGE and write simulation-re
 Stage 1 gives one mesh per part: `--stage1 code` lets the code model (--code-model) write a part
 program from the image, run by the interpreter; `--stage1 mesh:FILE` reads a part-segmented mesh
 from any tool (a GLB with one node per part, or an OBJ with one group per part; parts named 1..K
-keep those ids, other names are numbered in natural name order). The segmentation S is rendered
+keep those ids, other names are numbered in natural name order); `--stage1 parts:DIR` takes
+ground-truth parts (a folder of <id>.obj, e.g. a dataset object's, to test stage 2 alone). The
+parts are centred with largest extent 1 (the normalised frame). The segmentation S is rendered
 from the image's camera (--camera), and the structure model (--structure-model) reads the image,
 S and the part legend and writes the structure.
 
 Outputs in --out: structure.json, seg.png, parts/, object.urdf, object.xml (MJCF), object.glb,
 object_blender.py, physics.json, report.html, report.png (and program.txt for the code backend,
-structure_raw.txt when the model's JSON is invalid). A bad input stops with one error line; the
-outputs written before it are kept.
+structure_raw.txt when the model's JSON is invalid), prompt.txt (the structure model's prompt).
+A bad input stops with one error line; the outputs written before it are kept.
 """
 
 CAMERA_HELP = ("JSON file with the image's camera in the normalised object frame (centre at the origin, "
@@ -52,8 +54,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("predict", help="image in, articulated simulation-ready object out",
                               description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("image", help="the input image (PNG, JPEG, ...)")
-    p.add_argument("--stage1", required=True, metavar="code|mesh:FILE",
-                   help="where the part meshes come from: `code` (the code model) or `mesh:FILE` (.glb/.gltf/.obj)")
+    p.add_argument("--stage1", required=True, metavar="code|mesh:FILE|parts:DIR",
+                   help="where the part meshes come from: `code` (the code model), `mesh:FILE` (.glb/.gltf/.obj) "
+                        "or `parts:DIR` (a folder of <id>.obj)")
     p.add_argument("--structure-model", metavar="DIR", help="stage-2 checkpoint folder (config.json + safetensors)")
     p.add_argument("--code-model", metavar="DIR",
                    help="stage-1 code-model checkpoint folder (needed for --stage1 code)")

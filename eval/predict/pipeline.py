@@ -33,7 +33,8 @@ from eval.predict.models import DEFAULT_MAX_NEW_TOKENS, TextModel, code_model, s
 from eval.predict.outputs import write_exports, write_physics
 from eval.predict.report import ReportInputs, write_report
 from eval.predict.segmentation import default_camera, render_segmentation
-from eval.predict.stage1 import CODE, Stage1, parse_stage1, stage1_from_mesh, stage1_from_program
+from eval.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_mesh, stage1_from_parts_dir,
+                                 stage1_from_program)
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.model.processor import load_image
@@ -99,7 +100,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
             on_output: OutputListener | None = None, progress: bool = False) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
-    ``stage1``: "code" or "mesh:FILE". ``structure_model_dir`` / ``code_model_dir``: checkpoint
+    ``stage1``: "code", "mesh:FILE" or "parts:DIR" (see eval.predict.stage1). ``structure_model_dir`` / ``code_model_dir``: checkpoint
     folders (``eval.generation.Generator.load``); ``generate_structure`` (SPEC §3 prompt text ->
     structure JSON text, seeing I and S) and ``generate_program`` (the code prompt -> part program
     text, seeing I) replace them. ``camera``: the image's camera in the normalised frame (default:
@@ -110,7 +111,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
-    backend = parse_stage1(stage1)
+    backend, source = parse_stage1(stage1)
     out.mkdir(parents=True, exist_ok=True)
     files: dict[str, Path] = {}
 
@@ -135,8 +136,10 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
             (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
             wrote("program", out / "program.txt")
             parts_in = stage1_from_program(program)
+        elif backend == MESH:
+            parts_in = stage1_from_mesh(source, mesh_up)
         else:
-            parts_in = stage1_from_mesh(backend, mesh_up)
+            parts_in = stage1_from_parts_dir(source)
         palette = object_palette(PALETTE_CATEGORY, digest)
         boxes = part_boxes(parts_in.parts)
         camera_given = camera is not None

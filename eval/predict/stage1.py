@@ -4,7 +4,10 @@ Backends:
 * ``code``: a part program (written by the code model from the image, or handed in) runs in the
   interpreter (parsed, never exec-ed) into part meshes with semantic names (the program's materials
   are not used: materials are stage 2's to predict, from the image);
-* ``mesh:FILE``: a part-segmented mesh from any tool (see :mod:`eval.predict.mesh_input`).
+* ``mesh:FILE``: a part-segmented mesh from any tool (see :mod:`eval.predict.mesh_input`);
+* ``parts:DIR``: ground-truth parts, a folder of ``<id>.obj`` (``.stl``, ``.ply``, ``.glb``) as
+  ``jax3dc.geometry.parts`` writes it (a dataset object's parts, or a previous prediction's
+  ``parts/``): stage 2 alone, for evaluation.
 
 Either way the parts are then centred with largest extent 1 (``normalise_parts``); the factor is
 kept as the scale (mesh: file units per nu, metres for a mesh in metres).
@@ -19,11 +22,12 @@ import trimesh
 
 from eval.predict.mesh_input import load_segmented_mesh
 from jax3dc.errors import InputFileError, ProgramError
-from jax3dc.geometry.parts import normalise_parts
+from jax3dc.geometry.parts import load_parts, normalise_parts
 from jax3dc.program.interpreter import run_program
 
 CODE = "code"
-MESH_PREFIX = "mesh:"
+MESH = "mesh"
+PARTS = "parts"
 
 
 @dataclass(frozen=True)
@@ -33,18 +37,20 @@ class Stage1:
     parts: dict[int, trimesh.Trimesh]
     names: dict[int, str]
     scale: float  # source units per nu
-    source: str  # "code" or the mesh file's path
+    source: str  # "code", or the mesh file's / parts folder's path
     program: str | None = None
 
 
-def parse_stage1(spec: str) -> str | Path:
-    """``code`` -> "code"; ``mesh:FILE`` -> Path(FILE); anything else is an InputFileError."""
+def parse_stage1(spec: str) -> tuple[str, Path | None]:
+    """``code`` -> ("code", None); ``mesh:FILE`` -> ("mesh", FILE); ``parts:DIR`` -> ("parts", DIR);
+    anything else is an InputFileError."""
     if spec == CODE:
-        return CODE
-    if spec.startswith(MESH_PREFIX) and len(spec) > len(MESH_PREFIX):
-        return Path(spec[len(MESH_PREFIX):])
-    raise InputFileError(spec, "--stage1 must be `code` or `mesh:FILE` "
-                               "(a GLB with one node per part, or an OBJ with groups)")
+        return CODE, None
+    kind, _, path = spec.partition(":")
+    if kind in (MESH, PARTS) and path:
+        return kind, Path(path)
+    raise InputFileError(spec, "--stage1 must be `code`, `mesh:FILE` (a GLB with one node per part, or an OBJ "
+                               "with groups) or `parts:DIR` (a folder of <id>.obj part meshes)")
 
 
 def _normalised(parts: dict[int, trimesh.Trimesh], where: str) -> tuple[dict[int, trimesh.Trimesh], float]:
@@ -59,6 +65,12 @@ def stage1_from_mesh(path: str | Path, up: str = "z") -> Stage1:
     parts, names = load_segmented_mesh(path, up=up)
     normalised, scale = _normalised(parts, str(path))
     return Stage1(normalised, names, scale, str(path))
+
+
+def stage1_from_parts_dir(directory: str | Path) -> Stage1:
+    """Parts of a parts folder (``load_parts``), re-normalised like every other backend's."""
+    normalised, scale = _normalised(load_parts(directory), str(directory))
+    return Stage1(normalised, {}, scale, str(directory))
 
 
 def stage1_from_program(text: str) -> Stage1:

@@ -49,10 +49,15 @@ def test_empty_mesh(inputs, tmp_path):
         run(inputs[0], f"mesh:{empty}", tmp_path / "out")
 
 
-@pytest.mark.parametrize("spec", ["mesh:", "meshes:x.glb", "codes"])
+@pytest.mark.parametrize("spec", ["mesh:", "meshes:x.glb", "codes", "parts:"])
 def test_bad_stage1_spec(inputs, tmp_path, spec):
     with pytest.raises(InputFileError, match="--stage1"):
         run(inputs[0], spec, tmp_path / "out")
+
+
+def test_missing_parts_dir(inputs, tmp_path):
+    with pytest.raises(InputFileError, match="parts directory not found"):
+        run(inputs[0], f"parts:{tmp_path / 'nope'}", tmp_path / "out")
 
 
 def test_program_that_fails_to_parse_names_the_line(inputs, tmp_path):

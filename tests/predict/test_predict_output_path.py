@@ -111,3 +111,12 @@ def test_obj_groups_give_the_same_outputs_as_the_glb(mesh_run, tmp_path):
     assert np.mean(np.all(seg == want, axis=-1)) > 0.999
     for name in ("structure.json", "physics.json"):
         assert (tmp_path / "out" / name).read_text() == (first.out / name).read_text(), name
+
+
+def test_parts_dir_backend_reads_a_previous_prediction(mesh_run, tmp_path):
+    first = mesh_run[0]
+    again = predict(first.out.parent / "image.png", f"parts:{first.out / 'parts'}", out=tmp_path,
+                    camera=CAMERA, generate_structure=lambda prompt: target_json())
+    assert sorted(again.stage1.parts) == sorted(first.stage1.parts)
+    for name in ("prompt.txt", "structure.json", "physics.json"):
+        assert (tmp_path / name).read_text() == (first.out / name).read_text(), name
