@@ -2,9 +2,10 @@
 
 Steps, each writing its outputs into ``out`` as soon as they exist, so that a failure later on
 leaves every output made before it (and the report says what failed):
-  1. image I (any image Pillow reads) and the palette of this image (seeded from its bytes);
-  2. stage 1: part meshes (code model -> part program -> interpreter, or a segmented mesh file)
-     -> parts/ (+ program.txt for the code backend) and the stage-2 prompt -> prompt.txt;
+  1. image I (any image Pillow reads; transparency on white, as the model's processor does) and
+     the palette of this image (seeded from its bytes);
+  2. stage 1: part meshes (code model -> part program -> interpreter, a segmented mesh file, or
+     a parts folder) -> parts/ (+ program.txt for the code backend) and the stage-2 prompt -> prompt.txt;
   3. S rendered from the image's camera -> seg.png;
   4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
      canonical); invalid output -> structure_raw.txt and a StructureError;
@@ -37,7 +38,7 @@ from eval.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_m
                                  stage1_from_program)
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
-from jax3dc.model.processor import load_image
+from jax3dc.model.processor import load_image, to_rgb
 from jax3dc.palette import object_palette
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
@@ -67,10 +68,10 @@ class PredictResult:
 
 def _image_and_digest(image: str | Path | Image.Image) -> tuple[Image.Image, str]:
     if isinstance(image, Image.Image):
-        rgb = image.convert("RGB")
+        rgb = to_rgb(image)
         return rgb, hashlib.sha256(png_bytes(np.asarray(rgb))).hexdigest()
     path = Path(image)
-    rgb = load_image(path).convert("RGB")
+    rgb = to_rgb(load_image(path))
     return rgb, hashlib.sha256(path.read_bytes()).hexdigest()
 
 

@@ -120,3 +120,16 @@ def test_parts_dir_backend_reads_a_previous_prediction(mesh_run, tmp_path):
     assert sorted(again.stage1.parts) == sorted(first.stage1.parts)
     for name in ("prompt.txt", "structure.json", "physics.json"):
         assert (tmp_path / name).read_text() == (first.out / name).read_text(), name
+
+
+
+def test_transparent_image_is_on_white_like_the_processor(mesh_run, tmp_path):
+    from PIL import Image
+
+    rgba = Image.new("RGBA", (64, 64), (200, 10, 10, 0))  # transparent red: white once composited
+    rgba.paste((10, 10, 200, 255), (16, 16, 48, 48))
+    predict(rgba, f"mesh:{mesh_run[0].out.parent / 'object.glb'}", out=tmp_path, camera=CAMERA,
+            generate_structure=lambda prompt: target_json())
+    report = np.asarray(Image.open(tmp_path / "report.png").convert("RGB"))
+    assert report[0, 0].tolist() == [255, 255, 255]  # the I panel's corner
+    assert report[256, 256].tolist() == [10, 10, 200]  # its opaque middle
