@@ -9,16 +9,15 @@ text), which is also the seam tests use to stand in for a model (``generate_stru
 
 from __future__ import annotations
 
-from typing import Callable, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 from PIL import Image
 
-from eval.generation import Generator
-from jax3dc.model.chat import encode_chat
-from jax3dc.model.generate import GenerationConfig, decode, prefill
-from jax3dc.model.processor import preprocess_images
 from jax3dc.prompt import chat_messages, code_messages
+
+if TYPE_CHECKING:
+    from eval.generation import Generator
 
 TextModel = Callable[[str], str]
 """Prompt text -> the model's raw output text (a structure JSON or a part program)."""
@@ -26,10 +25,14 @@ TextModel = Callable[[str], str]
 DEFAULT_MAX_NEW_TOKENS = 2048
 
 
-def generate_text(generator: Generator, images: Sequence[Image.Image], messages: list[dict],
+def generate_text(generator: "Generator", images: Sequence[Image.Image], messages: list[dict],
                   max_new_tokens: int) -> str:
     """The model's reply (greedy, without the end-of-turn token) to one chat whose image items are
     ``images``, in order."""
+    from jax3dc.model.chat import encode_chat
+    from jax3dc.model.generate import GenerationConfig, decode, prefill  # jax: imported only to generate
+    from jax3dc.model.processor import preprocess_images
+
     processed = preprocess_images(list(images), generator.processor)
     chat = encode_chat(generator.tokenizer, messages, processed.image_grid_thw,
                        generator.config.vision.spatial_merge_size, add_generation_prompt=True)
@@ -46,11 +49,11 @@ def generate_text(generator: Generator, images: Sequence[Image.Image], messages:
     return generator.tokenizer.decode(tokens)
 
 
-def structure_model(generator: Generator, image: Image.Image, seg: Image.Image, max_new_tokens: int) -> TextModel:
+def structure_model(generator: "Generator", image: Image.Image, seg: Image.Image, max_new_tokens: int) -> TextModel:
     """Stage 2 (f_str): reads (I, S, prompt) and writes the structure JSON."""
     return lambda prompt: generate_text(generator, [image, seg], chat_messages(prompt), max_new_tokens)
 
 
-def code_model(generator: Generator, image: Image.Image, max_new_tokens: int) -> TextModel:
+def code_model(generator: "Generator", image: Image.Image, max_new_tokens: int) -> TextModel:
     """Stage 1, code backend: reads I and the fixed code prompt and writes a part program."""
     return lambda prompt: generate_text(generator, [image], code_messages(), max_new_tokens)

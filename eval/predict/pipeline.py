@@ -22,7 +22,7 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 from PIL import Image
@@ -42,6 +42,9 @@ from jax3dc.model.processor import load_image, to_rgb
 from jax3dc.palette import object_palette
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
+
+if TYPE_CHECKING:
+    from eval.generation import Generator
 
 MAX_SEG_SIDE = 1024  # px; S has the image's size and aspect, its longer side at most this
 PALETTE_CATEGORY = "image"  # palette seed: "image/<sha256 of the image>", the same image gets the same colours
@@ -81,15 +84,30 @@ def seg_size(image: Image.Image) -> tuple[int, int]:
     return max(1, round(image.width * shrink)), max(1, round(image.height * shrink))
 
 
+class Checkpoints:
+    """Loads each checkpoint folder once: one model may have learned both tasks (issue 9), and a
+    4B model loaded twice would hold its weights twice."""
+
+    def __init__(self, dtype: str):
+        self.dtype = dtype
+        self.loaded: dict[Path, Generator] = {}
+
+    def get(self, folder: str | Path) -> "Generator":
+        from eval.generation import Generator
+
+        key = Path(folder).resolve()
+        if key not in self.loaded:
+            self.loaded[key] = Generator.load(folder, self.dtype)
+        return self.loaded[key]
+
+
 def program_text(image: Image.Image, code_model_dir: str | Path | None, generate_program: TextModel | None,
-                 max_new_tokens: int, dtype: str) -> str:
+                 max_new_tokens: int, checkpoints: Checkpoints) -> str:
     """The code model's part program for ``image`` (its prompt is jax3dc.prompt.CODE_PROMPT)."""
     if generate_program is None:
         if code_model_dir is None:
             raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
-        from eval.generation import Generator
-
-        generate_program = code_model(Generator.load(code_model_dir, dtype), image, max_new_tokens)
+        generate_program = code_model(checkpoints.get(code_model_dir), image, max_new_tokens)
     return generate_program(CODE_PROMPT)
 
 
@@ -115,6 +133,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     backend, source = parse_stage1(stage1)
     out.mkdir(parents=True, exist_ok=True)
     files: dict[str, Path] = {}
+    checkpoints = Checkpoints(dtype)
 
     def wrote(name: str, path: Path) -> None:
         files[name] = path
@@ -133,7 +152,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
         step("stage 1")
         rgb, digest = _image_and_digest(image)
         if backend == CODE:
-            program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, dtype)
+            program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, checkpoints)
             (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
             wrote("program", out / "program.txt")
             parts_in = stage1_from_program(program)
@@ -163,9 +182,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
                 if structure_model_dir is None:
                     raise InputFileError("--structure-model",
                                          "a structure model checkpoint (--structure-model DIR) is needed")
-                from eval.generation import Generator
-
-                generate_structure = structure_model(Generator.load(structure_model_dir, dtype), rgb,
+                generate_structure = structure_model(checkpoints.get(structure_model_dir), rgb,
                                                      Image.fromarray(seg), max_new_tokens)
             result.raw_text = generate_structure(result.prompt)
             try:
