@@ -87,3 +87,18 @@ def test_code_model_garbage_is_a_program_error_with_the_program_kept(checkpoint,
         predict(inputs[0], "code", checkpoint, checkpoint, out=tmp_path, max_new_tokens=MAX_NEW_TOKENS,
                 dtype="float32")
     assert (tmp_path / "program.txt").exists()
+
+
+def test_a_checkpoint_folder_is_loaded_once(tmp_path, monkeypatch):
+    from eval.generation import Generator
+    from eval.predict.pipeline import Checkpoints
+
+    loads = []
+    monkeypatch.setattr(Generator, "load", classmethod(lambda cls, folder, dtype: loads.append(folder) or object()))
+    checkpoints = Checkpoints("float32")
+    (tmp_path / "a").mkdir()
+    first = checkpoints.get(tmp_path / "a")
+    assert checkpoints.get(str(tmp_path / "a")) is first  # the same folder, however it is written
+    assert checkpoints.get(tmp_path / "a" / ".." / "a") is first
+    assert checkpoints.get(tmp_path / "b") is not first
+    assert len(loads) == 2
