@@ -29,6 +29,9 @@ QWEN_VL_SPECIAL_IDS: dict[str, int] = {
     "<|image_pad|>": 151655,
 }
 
+#: Size of Qwen3's learned vocabulary; its added tokens follow from this id on.
+QWEN_LEARNED_VOCAB = 151643
+
 #: Files of a Hugging Face tokenizer that travel with a checkpoint (those present are copied).
 TOKENIZER_FILES = ("tokenizer.json", "tokenizer_config.json", "vocab.json", "merges.txt",
                    "special_tokens_map.json", "added_tokens.json")
@@ -51,19 +54,33 @@ class SpecialTokens:
         return (self.im_end, self.endoftext)
 
 
+def expected_special_id(token: str, learned_vocab: int) -> int:
+    """Qwen3's layout: the added tokens follow the learned vocabulary in a fixed order, so a
+    smaller BPE with the same added tokens (jax3dc.model.bpe) has each at learned_vocab + offset;
+    for Qwen3 itself (151,643 learned ids) that is exactly QWEN_VL_SPECIAL_IDS."""
+    return learned_vocab + QWEN_VL_SPECIAL_IDS[token] - QWEN_LEARNED_VOCAB
+
+
 class Tokenizer:
-    """Text <-> ids for Qwen models; special tokens in the text are recognised, never added."""
+    """Text <-> ids for Qwen models; special tokens in the text are recognised, never added.
+
+    ``source`` is the tokenizer.json it was read from, or a description for one built in memory
+    (then save_pretrained writes the files from the tokenizer itself).
+    """
 
     def __init__(self, backend: tokenizers.Tokenizer, source: str, check_special_ids: bool = True):
         self._backend = backend
         self.source = source
+        learned = backend.get_vocab_size(with_added_tokens=False)
         ids = {}
-        for token, expected in QWEN_VL_SPECIAL_IDS.items():
+        for token in QWEN_VL_SPECIAL_IDS:
             found = backend.token_to_id(token)
             if found is None:
                 raise InputFileError(source, f"tokenizer lacks the special token {token}")
+            expected = expected_special_id(token, learned)
             if check_special_ids and found != expected:
-                raise InputFileError(source, f"special token {token} has id {found}, Qwen3-VL expects {expected}")
+                raise InputFileError(source, f"special token {token} has id {found}, Qwen3-VL's layout expects "
+                                     f"{expected} ({learned} learned ids + {expected - learned})")
             ids[token] = found
         self.special = SpecialTokens(
             endoftext=ids["<|endoftext|>"],
@@ -94,18 +111,17 @@ class Tokenizer:
         return [self.decode(row, skip_special_tokens) for row in rows]
 
     def save_pretrained(self, checkpoint_dir: str | os.PathLike, chat_template: str | None = None) -> None:
-        """Copy the tokenizer files next to a saved model; ``chat_template`` (e.g. chat.VL_CHAT_TEMPLATE)
-        goes to ``chat_template.jinja`` and replaces any template inside ``tokenizer_config.json``,
-        so transformers renders conversations the way we trained on them."""
-        source = os.path.dirname(self.source)
+        """Copy the tokenizer files next to a saved model (or write them, for a tokenizer built in
+        memory); ``chat_template`` (e.g. chat.VL_CHAT_TEMPLATE) goes to ``chat_template.jinja`` and
+        replaces any template inside ``tokenizer_config.json``, so transformers renders
+        conversations the way we trained on them."""
         os.makedirs(checkpoint_dir, exist_ok=True)
-        for name in TOKENIZER_FILES:
-            if os.path.isfile(os.path.join(source, name)) and name != "tokenizer_config.json":
-                shutil.copyfile(os.path.join(source, name), os.path.join(checkpoint_dir, name))
-        config_path = os.path.join(source, "tokenizer_config.json")
-        if os.path.isfile(config_path):
-            with open(config_path, encoding="utf-8") as f:
-                config = json.load(f)
+        if os.path.isfile(self.source):
+            config = self._copy_files(os.path.dirname(self.source), checkpoint_dir)
+        else:
+            self._backend.save(os.path.join(checkpoint_dir, "tokenizer.json"))
+            config = self._hf_config()
+        if config is not None:
             if chat_template is not None:
                 config.pop("chat_template", None)
             with open(os.path.join(checkpoint_dir, "tokenizer_config.json"), "w", encoding="utf-8") as f:
@@ -113,6 +129,36 @@ class Tokenizer:
         if chat_template is not None:
             with open(os.path.join(checkpoint_dir, "chat_template.jinja"), "w", encoding="utf-8") as f:
                 f.write(chat_template)
+
+    @staticmethod
+    def _copy_files(source: str, checkpoint_dir: str | os.PathLike) -> dict | None:
+        """Copies the files other than tokenizer_config.json; returns that one's content, if any."""
+        for name in TOKENIZER_FILES:
+            if os.path.isfile(os.path.join(source, name)) and name != "tokenizer_config.json":
+                shutil.copyfile(os.path.join(source, name), os.path.join(checkpoint_dir, name))
+        config_path = os.path.join(source, "tokenizer_config.json")
+        if not os.path.isfile(config_path):
+            return None
+        with open(config_path, encoding="utf-8") as f:
+            return json.load(f)
+
+    def _hf_config(self) -> dict:
+        """tokenizer_config.json that makes transformers use tokenizer.json as it is
+        (PreTrainedTokenizerFast: no model-specific class that would rebuild the pipeline)."""
+        added = sorted(self._backend.get_added_tokens_decoder().items())
+        return {
+            "tokenizer_class": "PreTrainedTokenizerFast",
+            "add_bos_token": False, "add_prefix_space": False, "bos_token": None, "unk_token": None,
+            "eos_token": "<|im_end|>", "pad_token": "<|endoftext|>",
+            "clean_up_tokenization_spaces": False, "split_special_tokens": False,
+            "model_max_length": 131072,
+            "added_tokens_decoder": {
+                str(i): {"content": t.content, "lstrip": t.lstrip, "normalized": t.normalized,
+                         "rstrip": t.rstrip, "single_word": t.single_word, "special": t.special}
+                for i, t in added},
+            "additional_special_tokens": [t.content for _, t in added
+                                          if t.special and t.content not in ("<|endoftext|>", "<|im_end|>")],
+        }
 
     def token_id(self, token: str) -> int:
         found = self._backend.token_to_id(token)
