@@ -133,14 +133,9 @@ class Trainer:
                   {"step": step, "val_loss": val_loss, "best_val_loss": best_val}, val_loss=val_loss)
 
     def export(self, directory: str) -> None:
-        from jax.experimental import multihost_utils
-
+        """Every process calls this: the export gathers each tensor collectively; process 0 writes."""
         self.model.trainable = self.state.params
-        if jax.process_count() > 1:  # every process takes part in the gather; one writes
-            self.model.trainable = multihost_utils.process_allgather(self.state.params, tiled=True)
-            self.model.frozen = multihost_utils.process_allgather(self.model.frozen, tiled=True)
-        if jax.process_index() == 0:
-            model_state.export_hf(self.model, directory, self.tokenizer, self.processor)
+        model_state.export_hf(self.model, directory, self.tokenizer, self.processor)
         self.model.trainable = None
 
     def flops_model(self) -> FlopsModel:

@@ -122,12 +122,17 @@ def _load_hf(cfg, mesh, attention_impl, is_trainable, train_sh, frozen_sh, compu
 
 def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None) -> None:
     """Write the model as an HF directory (safetensors + config.json, and the tokenizer and
-    image-processor files the run used, so generation encodes prompts exactly as training did)."""
+    image-processor files the run used, so generation encodes prompts exactly as training did).
+
+    With several processes every process must call this (each tensor is gathered from all of
+    them, one at a time); only process 0 writes."""
     from jax3dc.model import params as hf_params
     from jax3dc.model.chat import VL_CHAT_TEMPLATE
 
     model = state.merged()
     hf_params.save_pretrained(model, model.config, directory)
+    if jax.process_index() != 0:
+        return
     if tokenizer is not None:
         tokenizer.save_pretrained(directory, chat_template=VL_CHAT_TEMPLATE)
     if processor is not None:
