@@ -86,6 +86,14 @@ def tree_lines(r: ReportInputs) -> list[tuple[int, int, str]]:
     return out
 
 
+def relations_line(r: ReportInputs) -> str | None:
+    """``relations: symmetric 3-5 (yz), instance 6-7`` (None without a structure or relations)."""
+    if r.structure is None or not r.structure.relations:
+        return None
+    items = [f"{rel.type} {rel.a}-{rel.b}" + (f" ({rel.plane})" if rel.plane else "") for rel in r.structure.relations]
+    return "relations: " + ", ".join(items)
+
+
 def verdict_line(r: ReportInputs) -> str:
     if r.verdict is None:
         return "physics: not checked" + (f" ({r.error})" if r.error else "")
@@ -125,6 +133,7 @@ def write_html(r: ReportInputs, path: Path) -> Path:
         rows.append(f'<li style="margin-left:{depth * 1.5}em"><span class="sw" style="background:{colour}"></span>'
                     f"{html.escape(text)}</li>")
     error = f'<p class="err">{html.escape(r.error)}</p>' if r.error else ""
+    relations = f"<p>{html.escape(relations_line(r))}</p>" if relations_line(r) else ""
     images = "".join(f'<figure><img alt="{html.escape(caption)}" src="{_png_data_uri(image)}">'
                      f"<figcaption>{html.escape(caption)}</figcaption></figure>" for caption, image in panels(r))
     page = f"""<!DOCTYPE html>
@@ -134,7 +143,7 @@ def write_html(r: ReportInputs, path: Path) -> Path:
 figure{{display:inline-block;margin:0 1em 0 0}} ul{{list-style:none;padding-left:0}} .err{{color:#b00}}</style></head>
 <body><h1>jax3dc prediction</h1>
 <div>{images}</div>
-{error}<h2>Parts and joints</h2><ul>{''.join(rows)}</ul>
+{error}<h2>Parts and joints</h2><ul>{''.join(rows)}</ul>{relations}
 <h2>Physics</h2><p>{html.escape(verdict_line(r))}</p>
 </body></html>
 """
@@ -157,7 +166,8 @@ def write_png(r: ReportInputs, path: Path) -> Path:
     for depth, pid, text in tree_lines(r):
         for k, piece in enumerate(_wrap(text, 90 - 3 * depth)):
             lines.append((depth, pid if k == 0 else None, piece))
-    lines += [(0, None, t) for t in _wrap(verdict_line(r), 90)]
+    for text in (relations_line(r), verdict_line(r)):
+        lines += [(0, None, t) for t in _wrap(text, 90)] if text else []
     height = max(max(p.height for _, p in shown) + 2 * LINE, (len(lines) + 1) * LINE)
     canvas = Image.new("RGB", (PANEL * len(shown) + TEXT_WIDTH, height), (255, 255, 255))
     draw = ImageDraw.Draw(canvas)

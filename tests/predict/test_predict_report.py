@@ -77,3 +77,11 @@ def _inputs(result, camera_given, camera=None):
     return ReportInputs(Image.open(result.out.parent / "image.png"), np.asarray(Image.open(result.out / "seg.png")),
                         result.palette, result.stage1.names, part_boxes(result.stage1.parts),
                         camera or result.camera.to_dict(), camera_given, result.structure, result.verdict, None)
+
+
+def test_relations_are_listed(code_run):
+    page = (code_run.out / "report.html").read_text()
+    relations = code_run.structure.relations
+    assert relations  # the cabinet's two doors (and handles) mirror each other
+    for rel in relations:
+        assert f"{rel.type} {rel.a}-{rel.b}" + (f" ({rel.plane})" if rel.plane else "") in page
