@@ -10,11 +10,16 @@ def test_tiny_demo_runs_every_available_stage(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     stages = {s["stage"]: s for s in summary["stages"]}
     assert [s["stage"] for s in summary["stages"]] == [
-        "data", "reference", "baselines", "export", "train", "predict"]
-    for name in ("data", "reference", "baselines", "export"):
+        "data", "reference", "baselines", "export", "train", "evaluate", "predict"]
+    for name in ("data", "reference", "baselines", "export", "train", "evaluate"):
         assert stages[name]["status"] == "done"
-    for name in ("train", "predict"):  # honest about what is not built yet
-        assert stages[name]["status"] == "skipped" and stages[name]["reason"]
+    assert stages["train"]["steps"] >= 1 and (out / "train" / "hf" / "tokenizer.json").is_file()
+    assert 0.0 <= stages["evaluate"]["metrics"]["parse"] <= 100.0
+    predicted = stages["predict"]
+    assert predicted["status"] in ("done", "partial")
+    if predicted["status"] == "partial":  # a seconds-trained model writes no valid JSON: say so, keep the rest
+        assert "structure_raw.txt" in predicted["written"] and "seg.png" in predicted["written"]
+        assert predicted["reason"]
 
     ref = stages["reference"]
     assert ref["objects"] >= 10
@@ -32,4 +37,4 @@ def test_tiny_demo_runs_every_available_stage(tmp_path, capsys):
     for fmt in ("mjcf", "urdf"):
         assert mujoco.MjModel.from_xml_path(files[fmt]).njnt == export["joints_in_structure"]
     printed = capsys.readouterr().out
-    assert "summary.json" in printed and "skipped" in printed
+    assert "summary.json" in printed and "predict" in printed
