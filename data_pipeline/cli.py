@@ -14,6 +14,7 @@ from jax3dc.cli import command_group
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "data_pipeline.convert_cli",
     "data_pipeline.build_cli",
+    "data_pipeline.tokenizer_cli",
 )
 
 

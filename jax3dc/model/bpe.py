@@ -20,11 +20,13 @@ decode(encode(x)) == x holds for every string, not only NFC ones.
 from __future__ import annotations
 
 import dataclasses
-from typing import Iterable
+import re
+from typing import Iterable, Mapping, Sequence
 
 import tokenizers
 from tokenizers import AddedToken, Regex, decoders, models, pre_tokenizers, processors, trainers
 
+from jax3dc.model.chat import render_chat
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.tokenizer import Tokenizer
 
@@ -50,6 +52,20 @@ QWEN_SPLIT_PATTERN = (
 
 #: Embedding rows are padded to a multiple of this (tensor-core and sharding friendly).
 VOCAB_MULTIPLE = 128
+
+
+_ADDED_SPLIT = re.compile("|".join(re.escape(content) for content, _ in QWEN_ADDED_TOKENS))
+
+
+def chat_segments(messages: Sequence[Mapping]) -> list[str]:
+    """The texts between added tokens of a conversation as encode_chat renders it (``user\\n``
+    + prompt, ``assistant\\n`` + answer, the ``\\n`` between turns): what a BPE should be trained
+    on, since added tokens are matched before the learned vocabulary ever sees the text."""
+    images = sum(1 for m in messages if not isinstance(m["content"], str)
+                 for item in m["content"]
+                 if item.get("type") == "image" or "image" in item or "image_url" in item)
+    text, _ = render_chat(messages, [0] * images)
+    return [piece for piece in _ADDED_SPLIT.split(text) if piece]
 
 
 def _empty_byte_level_bpe() -> tokenizers.Tokenizer:
