@@ -1,6 +1,6 @@
 """Qwen3's tokenizer vs byte-level BPEs learned on our texts: which trains a from-scratch model faster.
 
-Run: python3 -m bench.tokenizer [--objects 500] [--vocab 1024 4096 16384] [--image-size 448]
+Run: python3 -m bench.tokenizer [--objects 500] [--vocab 1024 4096 16384] [--digits 1 3] [--image-size 448]
 
 Texts come straight from the factories (no rendering): for each object, at rest, the stage-2
 prompt (build_prompt), the target JSON (canonical structure with extracted relations, as
@@ -183,6 +183,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--objects", type=int, default=500, help="factory objects (default 500)")
     parser.add_argument("--vocab", type=int, nargs="+", default=[1024, 4096, 16384], help="BPE sizes, ids in all")
+    parser.add_argument("--digits", type=int, nargs="+", default=[1, 3],
+                        help="longest digit run per token, one BPE per value (Qwen3: 1; default 1 3)")
     parser.add_argument("--unseen", nargs="*", default=list(DEFAULT_UNSEEN), help="categories kept out of training")
     parser.add_argument("--image-size", type=int, default=448, help="side of I and S in pixels (default 448)")
     args = parser.parse_args()
@@ -198,10 +200,12 @@ def main() -> None:
     texts = training_texts(train)
     print(f"BPE training text: {sum(map(len, texts)) / 1e6:.2f} M characters in {len(texts)} segments")
     tokenizers = [("Qwen3", load_tokenizer())]
-    for size in args.vocab:
-        start = time.perf_counter()
-        tokenizers.append((f"BPE {size}", train_bpe(texts, size)))
-        print(f"BPE {size}: {tokenizers[-1][1].vocab_size} ids, trained in {time.perf_counter() - start:.1f} s")
+    for digits in args.digits:
+        for size in args.vocab:
+            name = f"BPE {size}" + ("" if digits == 1 else f", digits<={digits}")
+            start = time.perf_counter()
+            tokenizers.append((name, train_bpe(texts, size, digits=digits)))
+            print(f"{name}: {tokenizers[-1][1].vocab_size} ids, trained in {time.perf_counter() - start:.1f} s")
     rows = [measure(name, tok, held_out, unseen, args.image_size) for name, tok in tokenizers]
     print_table(rows)
     print("\n" + recommend(rows))

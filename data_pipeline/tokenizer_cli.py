@@ -47,6 +47,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="records to learn from (default train)")
     parser.add_argument("--min-frequency", type=int, default=2,
                         help="merge only pairs seen at least this often (default 2)")
+    parser.add_argument("--digits", type=int, default=1,
+                        help="longest run of digits one token may cover (default 1, as Qwen3; 3 shortens "
+                        "3-decimal numbers, see bench/tokenizer.py)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     parser.set_defaults(func=run_tokenizer_command)
 
@@ -58,8 +61,9 @@ def run_tokenizer_command(args: argparse.Namespace) -> int:
     from jax3dc.errors import InputFileError
     from jax3dc.model.bpe import QWEN_ADDED_TOKENS, train_bpe
 
-    if args.vocab_size < 256 + len(QWEN_ADDED_TOKENS) or args.min_frequency < 1:
-        raise SystemExit(f"--vocab-size must be >= {256 + len(QWEN_ADDED_TOKENS)} and --min-frequency >= 1")
+    if args.vocab_size < 256 + len(QWEN_ADDED_TOKENS) or args.min_frequency < 1 or args.digits < 1:
+        raise SystemExit(f"--vocab-size must be >= {256 + len(QWEN_ADDED_TOKENS)}, --min-frequency and "
+                         "--digits >= 1")
     total = 0
     for directory in args.data:
         manifest = load_manifest(directory)
@@ -71,7 +75,7 @@ def run_tokenizer_command(args: argparse.Namespace) -> int:
     texts = list(record_texts(progress, args.split))
     if not texts:
         raise InputFileError(args.data[0], f"no records in split {args.split!r}")
-    tokenizer = train_bpe(texts, args.vocab_size, args.min_frequency)
+    tokenizer = train_bpe(texts, args.vocab_size, args.min_frequency, args.digits)
     tokenizer.save_pretrained(args.out)
     if not args.quiet:
         print(f"{tokenizer.vocab_size} ids ({tokenizer.vocab_size - len(QWEN_ADDED_TOKENS)} learned + "

@@ -11,7 +11,8 @@ either tokenizer:
   * the 26 added tokens (same strings, same order, same special flags) right after the learned
     vocabulary, so ``<|image_pad|>`` is learned_size + 12 here as 151,643 + 12 is in Qwen3
     (tokenizer.expected_special_id); config_for_tokenizer carries the ids into the model config;
-  * Qwen3's pre-tokenizer split (words, punctuation runs, each digit alone) and the byte-level
+  * Qwen3's pre-tokenizer split (words, punctuation runs, each digit alone; optionally runs of
+    up to ``digits`` digits, since our texts are mostly 3-decimal numbers) and the byte-level
     alphabet, so any text encodes and decodes back exactly.
 Unlike Qwen3 there is no NFC normaliser: our texts are plain ASCII/UTF-8 and without it
 decode(encode(x)) == x holds for every string, not only NFC ones.
@@ -44,11 +45,12 @@ QWEN_ADDED_TOKENS: tuple[tuple[str, bool], ...] = (
 )
 
 #: Qwen3's pre-tokenizer split: contractions, letter runs (with one leading non-letter), single
-#: digits, punctuation runs (with trailing newlines), newline runs, spaces.
-QWEN_SPLIT_PATTERN = (
-    r"(?i:'s|'t|'re|'ve|'m|'ll|'d)|[^\r\n\p{L}\p{N}]?\p{L}+|\p{N}| ?[^\s\p{L}\p{N}]+[\r\n]*"
+#: digits ({digits}), punctuation runs (with trailing newlines), newline runs, spaces.
+SPLIT_PATTERN = (
+    r"(?i:'s|'t|'re|'ve|'m|'ll|'d)|[^\r\n\p{{L}}\p{{N}}]?\p{{L}}+|\p{{N}}{digits}| ?[^\s\p{{L}}\p{{N}}]+[\r\n]*"
     r"|\s*[\r\n]+|\s+(?!\S)|\s+"
 )
+QWEN_SPLIT_PATTERN = SPLIT_PATTERN.format(digits="")
 
 #: Embedding rows are padded to a multiple of this (tensor-core and sharding friendly).
 VOCAB_MULTIPLE = 128
@@ -68,10 +70,11 @@ def chat_segments(messages: Sequence[Mapping]) -> list[str]:
     return [piece for piece in _ADDED_SPLIT.split(text) if piece]
 
 
-def _empty_byte_level_bpe() -> tokenizers.Tokenizer:
+def _empty_byte_level_bpe(digits: int) -> tokenizers.Tokenizer:
+    pattern = QWEN_SPLIT_PATTERN if digits == 1 else SPLIT_PATTERN.format(digits=f"{{1,{digits}}}")
     backend = tokenizers.Tokenizer(models.BPE())
     backend.pre_tokenizer = pre_tokenizers.Sequence([
-        pre_tokenizers.Split(Regex(QWEN_SPLIT_PATTERN), behavior="isolated", invert=False),
+        pre_tokenizers.Split(Regex(pattern), behavior="isolated", invert=False),
         pre_tokenizers.ByteLevel(add_prefix_space=False, trim_offsets=False, use_regex=False),
     ])
     backend.post_processor = processors.ByteLevel(add_prefix_space=False, trim_offsets=False, use_regex=False)
@@ -79,18 +82,21 @@ def _empty_byte_level_bpe() -> tokenizers.Tokenizer:
     return backend
 
 
-def train_bpe(texts: Iterable[str], vocab_size: int, min_frequency: int = 2) -> Tokenizer:
+def train_bpe(texts: Iterable[str], vocab_size: int, min_frequency: int = 2, digits: int = 1) -> Tokenizer:
     """A byte-level BPE of at most ``vocab_size`` ids in all (learned + the 26 added tokens).
 
     The learned part is the 256 byte symbols plus merges of pairs seen at least
     ``min_frequency`` times; it stops early when no such pair is left, so a small corpus gives
-    fewer ids than asked. The same texts give the same tokenizer (training breaks count ties
-    by the pair's ids, never by hash order).
+    fewer ids than asked. ``digits``: the longest run of digits one token may cover (Qwen3: 1;
+    3 makes "0.082" three tokens instead of five). The same texts give the same tokenizer
+    (training breaks count ties by the pair's ids, never by hash order).
     """
     if vocab_size < 256 + len(QWEN_ADDED_TOKENS):
         raise ValueError(f"vocab_size {vocab_size} is below the 256 byte symbols + {len(QWEN_ADDED_TOKENS)} "
                          "added tokens")
-    backend = _empty_byte_level_bpe()
+    if digits < 1:
+        raise ValueError(f"digits must be >= 1, got {digits}")
+    backend = _empty_byte_level_bpe(digits)
     trainer = trainers.BpeTrainer(
         vocab_size=vocab_size - len(QWEN_ADDED_TOKENS), min_frequency=min_frequency,
         initial_alphabet=pre_tokenizers.ByteLevel.alphabet(), special_tokens=[], show_progress=False)
@@ -103,7 +109,7 @@ def train_bpe(texts: Iterable[str], vocab_size: int, min_frequency: int = 2) -> 
         (backend.add_special_tokens if special else backend.add_tokens)([token])
         if backend.token_to_id(content) != learned + index:
             raise RuntimeError(f"added token {content} got id {backend.token_to_id(content)}, not {learned + index}")
-    return Tokenizer(backend, f"<byte-level BPE: {learned} learned ids>")
+    return Tokenizer(backend, f"<byte-level BPE: {learned} learned ids, digit runs of <= {digits}>")
 
 
 def config_for_tokenizer(config: Qwen3VLConfig, tokenizer: Tokenizer) -> Qwen3VLConfig:
