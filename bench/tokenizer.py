@@ -17,7 +17,8 @@ parameters the vocabulary implies and the training FLOPs of one example, 6 x par
 positions, where every position goes through the decoder and the LM head (logits are made at
 every position) and the vision tower's patches add the same for every tokenizer; attention
 scores are left out. A structure example is I + S + prompt + target, a code example I +
-CODE_PROMPT + program. The recommendation at the end follows from these figures.
+CODE_PROMPT + program. The recommendation at the end follows from these figures (rule in
+recommend()).
 """
 
 from __future__ import annotations
@@ -163,20 +164,41 @@ def print_table(rows: list[dict]) -> None:
               f"{r['structure_flops'] / base['structure_flops']:.2f}x |")
 
 
-def recommend(rows: list[dict]) -> str:
-    """The tokenizer with the fewest FLOPs per structure+code example pair, among those that round-trip
-    every held-out text exactly and do not inflate unseen-category targets by more than 25 %."""
-    base = rows[0]
-    ok = [r for r in rows if r["round_trip"][0] == r["round_trip"][1]
-          and r["unseen_target"][0] <= 1.25 * base["unseen_target"][0]]
-    best = min(ok or rows, key=lambda r: r["structure_flops"] + r["code_flops"])
+def recommend(rows: list[dict], asked: dict[str, int]) -> list[str]:
+    """Lines of advice from the figures: among BPEs that keep Qwen3's split (one digit per token),
+    round-trip every held-out text and do not inflate unseen-category targets by more than 25 %,
+    the one with the fewest FLOPs per structure+code example pair; digit runs are reported
+    beside it, not chosen, since they change how numbers are tokenized and only a learning run
+    can say whether that helps."""
     cost = lambda r: r["structure_flops"] + r["code_flops"]
-    return (f"Recommendation: {best['name']} for from-scratch models: {cost(best) / cost(base):.2f}x the training "
-            f"FLOPs of Qwen3's tokenizer per structure+code example, {best['cost'].total / 1e6:.1f} M vs "
-            f"{base['cost'].total / 1e6:.1f} M parameters in `small`, exact round trip "
-            f"{best['round_trip'][0]}/{best['round_trip'][1]}, unseen-category targets "
-            f"{best['unseen_target'][0] / base['unseen_target'][0]:.2f}x Qwen3's tokens. "
-            "(Keep Qwen3's tokenizer for fine-tuning Qwen3-VL checkpoints.)")
+    base = rows[0]
+    ok = [r for r in rows[1:] if r["round_trip"][0] == r["round_trip"][1]
+          and r["unseen_target"][0] <= 1.25 * base["unseen_target"][0]]
+    lines = []
+    saturated = sorted({r["ids"] for r in rows[1:] if r["ids"] < asked[r["name"]]})
+    if saturated:
+        lines.append(f"Learned vocabularies stop at {', '.join(map(str, saturated))} ids whatever size is asked: "
+                     "no pair seen twice in the training text is left to merge, so larger sizes change nothing.")
+    plain = [r for r in ok if "digits" not in r["name"]]
+    if not plain:
+        return lines + ["Recommendation: keep Qwen3's tokenizer (no BPE round-trips exactly and covers unseen "
+                        "categories)."]
+    best = min(plain, key=lambda r: (round(cost(r) / 1e9), r["ids"]))
+    lines.append(
+        f"Recommendation: {best['name']} ({best['ids']:,} ids) for models trained from scratch: "
+        f"{cost(best) / cost(base):.2f}x the training FLOPs of Qwen3's tokenizer per structure+code example "
+        f"({best['structure_tokens']:.0f} vs {base['structure_tokens']:.0f} positions per structure example), "
+        f"{best['cost'].total / 1e6:.1f} M vs {base['cost'].total / 1e6:.1f} M parameters in `small`, exact round "
+        f"trip {best['round_trip'][0]}/{best['round_trip'][1]}, unseen-category targets "
+        f"{best['unseen_target'][0] / base['unseen_target'][0]:.2f}x Qwen3's tokens. Keep Qwen3's tokenizer when "
+        "fine-tuning a Qwen3-VL checkpoint.")
+    grouped = [r for r in ok if "digits" in r["name"]]
+    if grouped:
+        g = min(grouped, key=lambda r: (round(cost(r) / 1e9), r["ids"]))
+        lines.append(f"Digit runs ({g['name']}) would save a further {1 - cost(g) / cost(best):.0%} of FLOPs "
+                     f"({g['structure_tokens']:.0f} positions per structure example) but tokenize numbers "
+                     "differently from Qwen3; compare the two in a learning run before switching.")
+    return lines
 
 
 def main() -> None:
@@ -200,15 +222,17 @@ def main() -> None:
     texts = training_texts(train)
     print(f"BPE training text: {sum(map(len, texts)) / 1e6:.2f} M characters in {len(texts)} segments")
     tokenizers = [("Qwen3", load_tokenizer())]
+    asked = {}
     for digits in args.digits:
         for size in args.vocab:
             name = f"BPE {size}" + ("" if digits == 1 else f", digits<={digits}")
+            asked[name] = size
             start = time.perf_counter()
             tokenizers.append((name, train_bpe(texts, size, digits=digits)))
             print(f"{name}: {tokenizers[-1][1].vocab_size} ids, trained in {time.perf_counter() - start:.1f} s")
     rows = [measure(name, tok, held_out, unseen, args.image_size) for name, tok in tokenizers]
     print_table(rows)
-    print("\n" + recommend(rows))
+    print("\n" + "\n".join(recommend(rows, asked)))
 
 
 if __name__ == "__main__":
