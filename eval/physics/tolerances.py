@@ -4,6 +4,9 @@ Converted to metres with the object's scale when compared with simulator quantit
 """
 
 PENETRATION_TOL_NU = 0.025  # a contact deeper than this is interpenetration (voxel pieces are exact to ~pitch/2)
+CROSSING_MARGIN_NU = 0.03  # a point passes through a thin board when it gets this far past each face (real meshes graze by ~0.02), this far inside its edges
+FLOOR_TOL_NU = 0.025  # a joint driving a part this far below the rest pose's lowest point goes through the floor (as PENETRATION_TOL_NU)
+FLOOR_CONTACT_NU = 0.01  # a moved subtree this close to the floor at rest carries the object: moving it tips it over
 REST_PENETRATION_TOL_NU = 0.05  # at rest: real meshes interlock at hinges (a bucket handle through its lugs)
 ATTACH_TOL_NU = 0.07  # the pivot lies within this distance of the child AND of its parent
 DETACH_TOL_NU = 0.2  # a moving child farther than this from its parent (all geoms) is detached

@@ -1,7 +1,9 @@
 """Per-joint and per-object verdicts from the check results (pure numpy over the batched tables).
 
 Reasons are short stable strings: "penetrates parent at rest", "penetrates part P at q=V",
-"penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part),
+"penetrates part P (passes through it) at q=V" (a thin board driven through another, see ``crossing``),
+"penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part, or carries it into P),
+"penetrates the floor at q=V" (below the rest pose's lowest point, where the gravity test's floor is),
 "detached from parent at q=V", "pivot detached", "limit unreachable: lo|hi", and object-level
 "rest interpenetration: parts A,B" (fails the object), "combination interpenetration: parts A,B"
 (reported only), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
@@ -15,7 +17,9 @@ import numpy as np
 import trimesh
 
 from eval.physics import cpu_backend
+from eval.physics.crossing import crossings
 from eval.physics.dynamics import gravity, reachability, tolerated_pairs
+from eval.physics.floor import first_below_floor
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
 from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_PENETRATION_TOL_NU,
@@ -91,6 +95,11 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
     pen = (distances < -PENETRATION_TOL_NU * scale) & distinct[None] & ~rest_deep[None]
     # the joint that moves a body's rigid group (None: the group of a root)
     joint_of_group = {sim.part_body[p]: k for k, p in enumerate(sim.joint_parts)}
+    sweeps = {}
+    for k, part in enumerate(sim.joint_parts):
+        rows = _nearest_rest_first(np.nonzero(states.joint == k)[0], states.value, sim.model.qpos0[sim.joint_qpos[k]])
+        sweeps[part] = states.value[rows] / (1.0 if sim.joint_type[k] == "hinge" else scale)
+    crossed = crossings(structure, parts, sweeps)  # thin boards driven through each other: too shallow for the depth test
     for k, part in enumerate(sim.joint_parts):
         unit = 1.0 if sim.joint_type[k] == "hinge" else scale
         moved = sim.moved_by[k]
@@ -107,8 +116,14 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
                 other = b if moved[a] else a
                 hit = f"penetrates part {body_part[other]} at q={states.value[s] / unit:.3f}"
                 break
+        if hit is None and part in crossed:
+            other, value = crossed[part]
+            hit = f"penetrates part {other} (passes through it) at q={value:.3f}"
         if hit:
             reasons[part].append(hit)
+        below = first_below_floor(structure, parts, part, states.value[rows] / unit)
+        if below is not None:
+            reasons[part].append(f"penetrates the floor at q={below:.3f}")
         # a jointed part that this sweep runs into is at fault too: it stays put while the part
         # it should move with (a handle on a door, given the wrong parent) swings through it
         for s in rows:
@@ -119,6 +134,13 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
                 if hurt is not None and not any(r.startswith("penetrates part") for r in reasons[hurt]):
                     reasons[hurt].append(f"penetrates part {body_part[a if other == b else b]} "
                                          f"while joint {part} moves (q={states.value[s] / unit:.3f})")
+                # ... and so is a jointed part that this sweep carries into another (a rack hung on the
+                # dishwasher door instead of the tub: the door swings it through the tub)
+                k3 = joint_of_group.get(int(group[a if other == b else b]))
+                carried = None if k3 is None or k3 == k else sim.joint_parts[k3]
+                if carried is not None and not any(r.startswith("penetrates part") for r in reasons[carried]):
+                    reasons[carried].append(f"penetrates part {body_part[other]} "
+                                            f"while joint {part} moves (q={states.value[s] / unit:.3f})")
         parent_group = group == group[parent]
         overlap = None  # slides: the child's overlap with its parent along the axis, per sweep value (nu)
         if sim.joint_type[k] == "slide":
