@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
+from eval.physics.crossing import crossings
 from eval.physics.ground_truth import changes_motion, imported_objects
 from eval.physics.kinematics import SAME_MOTION_TOL_NU, symmetric_about, sweep_distance
 from eval.physics.mutations import mutations_of
@@ -140,6 +141,19 @@ def test_lid_lifted_off_its_pot_passes_but_not_far_away(seed):
     assert truth["ok"], truth
     reasons = _reasons(pot, _mutation(pot, "range doubled", lid))
     assert any(r.startswith("detached from parent (lifted off too far)") for r in reasons), reasons
+
+
+@pytest.mark.parametrize("category, name", [("eyeglasses", "temple"), ("laptop", "screen_lid")])
+def test_thin_part_swung_too_far_passes_through_a_board(category, name):
+    # a temple folded on through the frame, a screen opened on round into the base
+    obj = generate_object(category, 0)
+    part = _part_named(obj, name)
+    mutation = _mutation(obj, "range doubled", part)
+    assert changes_motion(obj.structure, mutation, obj.parts)
+    lo, hi = mutation.structure.nodes[part].joint.range
+    assert part in crossings(mutation.structure, obj.parts, {part: np.linspace(lo, hi, 9)})
+    assert part not in crossings(obj.structure, obj.parts, {part: np.linspace(*obj.structure.nodes[part].joint.range, 9)})
+    assert any(r.startswith("penetrates part") for r in _reasons(obj, mutation))
 
 
 # --- specific ground-truth objects pass ---------------------------------------------------------
