@@ -26,12 +26,18 @@ TINY = ("init=tiny", "data=synthetic", "seq_len=32", "image_size=16", "batch_siz
         f"save_every={SAVE_EVERY}", "eval_every=100", "eval_batches=1", "keep_last=5")
 TIMEOUT_S = 600
 _MULTIPROCESS_ENV = ("JAX_COORDINATOR_ADDRESS", "JAX_NUM_PROCESSES", "JAX_PROCESS_ID")
+# XLA's persistent compilation cache shared by the runs of one test session (set by conftest):
+# the one-device runs compile the same programs, and compiling is most of a tiny run's time.
+compile_cache: Path | None = None
 
 
 def _env(devices: int, extra: dict[str, str] | None = None) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if k not in _MULTIPROCESS_ENV}
     env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={devices}"
     env["PYTHONPATH"] = str(ROOT)
+    if compile_cache is not None:
+        env["JAX_COMPILATION_CACHE_DIR"] = str(compile_cache)
+        env["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = "0"
     env.update(extra or {})
     return env
 
