@@ -1,5 +1,6 @@
 """A NaN loss (from a corrupt batch) stops the run with NonFiniteLossError naming the last good
-checkpoint, saves nothing from the bad step, and leaves that checkpoint intact."""
+checkpoint, saves nothing from the bad step, and leaves that checkpoint intact: the run
+continues from it exactly as the uninterrupted run did."""
 
 import re
 from pathlib import Path
@@ -33,3 +34,10 @@ def test_nan_loss_stops_and_names_intact_last_good_checkpoint(reference_run: Pat
         np.testing.assert_array_equal(value, theirs[path], err_msg=path)
     assert all(np.isfinite(v).all() for v in ours.values() if v.dtype.kind == "f")
     assert train_runs.saved_loader_positions(run, SAVED) == {"processes": [{"step": SAVED, "seed": 0}]}
+
+    # And it restores: the same run, its data clean again, continues with the reference losses.
+    train_runs.train(run, devices=1, log="resumed")
+    assert f"resumed from step {SAVED}" in (run.parent / f"{run.name}.resumed.log").read_text()
+    got = train_runs.losses(run)
+    for step in range(SAVED + 1, train_runs.STEPS + 1):
+        assert got[step][-1] == want[step][-1], f"step {step}: {got[step]} vs {want[step]}"
