@@ -7,7 +7,6 @@ The model itself (jax3dc.model) knows nothing about optimisers or data.
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 from dataclasses import dataclass
@@ -19,6 +18,7 @@ import numpy as np
 from flax import nnx
 from jax.sharding import Mesh
 
+from jax3dc.model.bpe import config_for_tokenizer
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.random_weights import build_random
@@ -59,18 +59,6 @@ def model_config(init: str) -> Qwen3VLConfig:
         return Qwen3VLConfig.from_hf_dict(json.load(f))
 
 
-def fit_to_tokenizer(mcfg: Qwen3VLConfig, tokenizer) -> Qwen3VLConfig:
-    """A preset's config with the vocabulary and special-token ids of the run's tokenizer (a
-    preset trained from scratch may use the packaged Qwen3 tokenizer or a smaller BPE)."""
-    special = tokenizer.special
-    video = tokenizer.token_id("<|video_pad|>")
-    vocab = max(mcfg.text.vocab_size if tokenizer.vocab_size <= mcfg.text.vocab_size else 0,
-                -(-tokenizer.vocab_size // 128) * 128)
-    return dataclasses.replace(
-        mcfg, text=dataclasses.replace(mcfg.text, vocab_size=vocab), image_token_id=special.image_pad,
-        video_token_id=video, vision_start_token_id=special.vision_start, vision_end_token_id=special.vision_end)
-
-
 def dtypes(cfg: TrainConfig) -> tuple[jnp.dtype, jnp.dtype]:
     """(compute dtype, master dtype of the trainable parameters)."""
     compute = jnp.dtype(cfg.compute_dtype)
@@ -88,7 +76,7 @@ def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, toke
     is given), else the HF checkpoint's."""
     mcfg = model_config(cfg.init)
     if tokenizer is not None and cfg.init in PRESETS:
-        mcfg = fit_to_tokenizer(mcfg, tokenizer)
+        mcfg = config_for_tokenizer(mcfg, tokenizer)  # vocabulary and special ids of the run's tokenizer
     compute, _ = dtypes(cfg)
     build = _constructor(cfg, mcfg, attention_impl)
     is_trainable = trainable_filter(cfg.freeze)
