@@ -204,9 +204,11 @@ def _overlap_along_axis(structure: Structure, parts: dict[int, trimesh.Trimesh],
 
 
 def _lifts_off(overlap, values_nu: np.ndarray) -> bool:
-    """An unguided slide that only ever parts the child from its parent (a lid lifted off a pot)."""
+    """An unguided slide that only ever parts the child from its parent, one way (a lid lifted off
+    a pot; a part slid off to either side is not a lid)."""
     rest = overlap(0.0)
-    return rest < SLIDE_GUIDE_OVERLAP_NU and all(overlap(v) <= rest + 1e-9 for v in values_nu)
+    one_way = bool(np.all(values_nu >= -1e-9) or np.all(values_nu <= 1e-9))
+    return one_way and rest < SLIDE_GUIDE_OVERLAP_NU and all(overlap(v) <= rest + 1e-9 for v in values_nu)
 
 
 def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int) -> bool:
