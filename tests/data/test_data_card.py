@@ -1,7 +1,6 @@
 """Dataset card: statistics agree with the records; contact sheet written; import via CLI."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 from PIL import Image
@@ -10,8 +9,8 @@ from data_pipeline.build import BuildConfig, factory_sources, run_build
 from data_pipeline.card import CARD_JSON, CONTACT_SHEET, dataset_card
 from data_pipeline.shards import read_dataset
 from jax3dc.cli import main
+from tests.shared_fixtures import partnet_object
 
-FIXTURES = Path("/work/shared/fixtures/partnet_mobility")
 
 
 def test_card_counts_match_records(tmp_path):
@@ -31,10 +30,7 @@ def test_card_counts_match_records(tmp_path):
 
 
 def test_import_cli_writes_shards(tmp_path):
-    sources = [str(FIXTURES / "door_8877"), str(FIXTURES / "microwave_7119")]
-    if not all(Path(s).exists() for s in sources):
-        import pytest
-        pytest.skip("PartNet-Mobility fixtures not present")
+    sources = [str(partnet_object("door_8877")), str(partnet_object("microwave_7119"))]
     assert main(["data", "import", *sources, "--out", str(tmp_path), "--views", "2", "--size", "32", "--quiet"]) == 0
     records = list(read_dataset(tmp_path))
     assert sorted({r.meta["object_id"] for r in records}) == ["door_8877", "microwave_7119"]

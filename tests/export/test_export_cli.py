@@ -17,6 +17,7 @@ from export_cases import CASES
 from jax3dc.cli import main
 from jax3dc.geometry.parts import save_parts
 from jax3dc.structure import to_json
+from tests.blender_env import blender_python
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -108,8 +109,6 @@ print(json.dumps({"worst": worst, "euler": list(local.to_euler()), "constraints"
 """
 
 
-@pytest.mark.skipif(not os.environ.get("JAX3DC_BLENDER_PYTHON"),
-                    reason="set JAX3DC_BLENDER_PYTHON to a Python with the bpy module to run the script in Blender")
 def test_blender_script_runs_in_blender(tmp_path):
     """Real Blender: every part lands where its mesh says, and a joint is held inside its range."""
     from jax3dc.export.assembly import label_of
@@ -120,7 +119,7 @@ def test_blender_script_runs_in_blender(tmp_path):
     expected = {label_of(i, n.name): (np.asarray(parts[i].vertices) * 1.7).tolist() for i, n in structure.nodes.items()}
     (tmp_path / "expected.json").write_text(json.dumps(expected))
     (tmp_path / "check.py").write_text(_BLENDER_CHECK)
-    run = subprocess.run([os.environ["JAX3DC_BLENDER_PYTHON"], str(tmp_path / "check.py"), str(script),
+    run = subprocess.run([blender_python(), str(tmp_path / "check.py"), str(script),
                           str(tmp_path / "expected.json")], capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr[-2000:]
     result = json.loads(run.stdout.strip().splitlines()[-1])

@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from jax3dc.cli import main
+from tests.shared_fixtures import PARTNET_MOBILITY, partnet_object
 
-FIXTURES = Path(__file__).parents[2].parent / "shared" / "fixtures" / "partnet_mobility"
+FIXTURES = PARTNET_MOBILITY
 
 
-@pytest.mark.skipif(not (FIXTURES / "microwave_7119").is_dir(), reason=f"fixtures not found at {FIXTURES}")
 def test_convert_writes_a_readable_object(tmp_path, capsys):
     from data_pipeline.importers.source import import_object
     from jax3dc.geometry.parts import load_parts
@@ -22,7 +21,7 @@ def test_convert_writes_a_readable_object(tmp_path, capsys):
     out = tmp_path / "microwave"
     (out / "parts").mkdir(parents=True)
     (out / "parts" / "9.obj").write_text("v 0 0 0\n")  # stale part of an earlier conversion
-    assert main(["data", "convert", str(FIXTURES / "microwave_7119"), "--out", str(out), "--category", "oven"]) == 0
+    assert main(["data", "convert", str(partnet_object("microwave_7119")), "--out", str(out), "--category", "oven"]) == 0
     assert "3 parts, 1 joints (hinge)" in capsys.readouterr().out
 
     expected = import_object(FIXTURES / "microwave_7119")

@@ -10,8 +10,8 @@ import pytest
 import trimesh
 
 from data_pipeline.importers.source import import_object
+from tests.shared_fixtures import partnet_object
 
-FIXTURES = Path(__file__).parents[2].parent / "shared" / "fixtures" / "partnet_mobility"
 
 CABINET = """<mujoco model="cabinet">
   <compiler angle="degree" meshdir="meshes"/>
@@ -142,11 +142,9 @@ def test_several_joints_in_one_body_keep_the_hinge(tmp_path):
 @pytest.mark.parametrize("name", ["microwave_7119", "drawer_20453", "safe_rotate_101593"])
 def test_round_trip_through_the_mjcf_exporter(tmp_path, name):
     """PartNet-Mobility object -> structure + parts -> jax3dc's MJCF export -> this importer."""
-    if not (FIXTURES / name).is_dir():
-        pytest.skip(f"fixture {name} not found at {FIXTURES}")
     from jax3dc.export.mjcf import export_mjcf
 
-    first = import_object(FIXTURES / name)
+    first = import_object(partnet_object(name))
     xml = export_mjcf(first.structure, first.parts, tmp_path, scale=first.meta["scale"], model_name="obj")
     second = import_object(xml)
     assert second.meta["scale"] == pytest.approx(first.meta["scale"], rel=1e-3)

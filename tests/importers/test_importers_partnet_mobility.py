@@ -17,13 +17,13 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from data_pipeline.importers.source import import_object
+from tests.shared_fixtures import PARTNET_MOBILITY, partnet_object
 
-FIXTURES = Path(__file__).parents[2].parent / "shared" / "fixtures" / "partnet_mobility"
-OBJECTS = sorted(p.name for p in FIXTURES.iterdir() if (p / "mobility.urdf").is_file()) if FIXTURES.is_dir() else []
+FIXTURES = PARTNET_MOBILITY
+OBJECTS = sorted(p.name for p in FIXTURES.iterdir() if (p / "mobility.urdf").is_file())
 # PartNet-Mobility objects face -X once Z-up; SPEC §2 wants -Y: a quarter turn about +Z.
 TURN = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
-pytestmark = pytest.mark.skipif(not OBJECTS, reason=f"PartNet-Mobility fixtures not found at {FIXTURES}")
 
 
 def _vec(text, default=(0.0, 0.0, 0.0)):
@@ -148,9 +148,7 @@ def test_meta_records_source_scale_and_names(imported):
 
 
 def test_joint_against_the_world_is_dropped_with_a_warning():
-    if "toaster_move_103482" not in OBJECTS:
-        pytest.skip("toaster fixture absent")
-    obj = import_object(FIXTURES / "toaster_move_103482")
+    obj = import_object(partnet_object("toaster_move_103482"))
     assert obj.structure.joints() == {}
     assert any("joint_2" in w and "dropped" in w for w in obj.meta["warnings"])
     # its semantics.txt calls link_1 a slider, but the URDF joint is fixed: the URDF wins, noted

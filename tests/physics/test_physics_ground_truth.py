@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,10 +17,9 @@ from eval.physics.kinematics import SAME_MOTION_TOL_NU, symmetric_about, sweep_d
 from eval.physics.mutations import mutations_of
 from eval.physics.verdict import check_object
 from jax3dc.structure.schema import Joint
+from tests.shared_fixtures import partnet_object
 
 warnings.filterwarnings("ignore", category=RuntimeWarning)
-
-FIXTURES = Path(__file__).resolve().parents[3] / "shared" / "fixtures" / "partnet_mobility"
 
 
 def _mutation(obj, kind, part):
@@ -160,9 +158,7 @@ def test_thin_part_swung_too_far_passes_through_a_board(category, name):
 
 @pytest.mark.parametrize("name", ["drawer_20453", "microwave_7119"])
 def test_partnet_mobility_fixture_passes(name):
-    if not (FIXTURES / name).is_dir():
-        pytest.skip(f"fixture {FIXTURES / name} not present")
-    obj = next(imported_objects([FIXTURES / name]))
+    obj = next(imported_objects([partnet_object(name)]))
     verdict = check_object(obj.structure, obj.parts, obj.scale)
     assert verdict["joints"] and all(j["ok"] for j in verdict["joints"].values()), json.dumps(verdict)
 

