@@ -24,6 +24,7 @@ from jax3dc.geometry.parts import part_boxes
 from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt
 from jax3dc.structure import boxes_to_dict, to_json
+from tests.tiny_checkpoint import write_tiny_checkpoint
 
 CAMERA = {"lookat": [0.0, 0.0, 0.0], "distance": 2.4, "azimuth": 100.0, "elevation": -20.0}  # as data build writes
 TEST_OBJECTS = (("cabinet", 0), ("drawer_chest", 1), ("laptop", 2))
@@ -156,28 +157,7 @@ def test_reference_run_on_a_data_build(tmp_path: Path) -> None:
 def checkpoint(tmp_path_factory) -> Path:
     """A tiny random Qwen3-VL whose vocabulary covers the real Qwen special ids, saved with the
     real tokenizer and an image processor sized for it."""
-    import dataclasses
-
-    from flax import nnx
-
-    from jax3dc.model.chat import VL_CHAT_TEMPLATE
-    from jax3dc.model.config import Qwen3VLConfig
-    from jax3dc.model.params import save_pretrained
-    from jax3dc.model.processor import ImageProcessorConfig
-    from jax3dc.model.qwen3_vl import Qwen3VL
-    from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS, load_tokenizer
-
-    tiny = Qwen3VLConfig.tiny(vocab_size=151936, tie_word_embeddings=True)
-    config = dataclasses.replace(
-        tiny, image_token_id=QWEN_VL_SPECIAL_IDS["<|image_pad|>"], video_token_id=151656,
-        vision_start_token_id=QWEN_VL_SPECIAL_IDS["<|vision_start|>"],
-        vision_end_token_id=QWEN_VL_SPECIAL_IDS["<|vision_end|>"])
-    path = tmp_path_factory.mktemp("tiny_checkpoint")
-    save_pretrained(Qwen3VL(config, rngs=nnx.Rngs(0)), config, path)
-    load_tokenizer().save_pretrained(path, chat_template=VL_CHAT_TEMPLATE)
-    ImageProcessorConfig(patch_size=config.vision.patch_size, merge_size=config.vision.spatial_merge_size,
-                         min_pixels=16 * 16, max_pixels=32 * 32).save_pretrained(path)
-    return path
+    return write_tiny_checkpoint(tmp_path_factory.mktemp("tiny_checkpoint"))
 
 
 @pytest.mark.slow

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import io
 from pathlib import Path
 
@@ -12,7 +11,8 @@ from PIL import Image
 from data_pipeline.factories import generate_object
 from data_pipeline.record import Record, encode_record
 from jax3dc.geometry.parts import part_boxes
-from jax3dc.model.config import QWEN_VOCAB_SIZE, Qwen3VLConfig
+from jax3dc.model.bpe import config_for_tokenizer
+from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.processor import ImageProcessorConfig
 from jax3dc.model.tokenizer import load_tokenizer
 from jax3dc.palette import object_palette
@@ -25,12 +25,7 @@ CATEGORIES = ("cabinet", "drawer_chest", "laptop", "door", "stapler", "faucet", 
 
 def tiny_config() -> Qwen3VLConfig:
     """The tiny preset with the real Qwen vocabulary and special-token ids."""
-    tok = load_tokenizer()
-    cfg = Qwen3VLConfig.tiny(vocab_size=QWEN_VOCAB_SIZE)
-    return dataclasses.replace(cfg, image_token_id=tok.special.image_pad,
-                               vision_start_token_id=tok.special.vision_start,
-                               vision_end_token_id=tok.special.vision_end,
-                               video_token_id=tok.token_id("<|video_pad|>"))
+    return config_for_tokenizer(Qwen3VLConfig.tiny(), load_tokenizer())
 
 
 def tiny_processor() -> ImageProcessorConfig:

@@ -8,39 +8,20 @@ prompt in a Record. (The test with tiny *trained* models is the lead's.)
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import pytest
 from PIL import Image
 
 from predict_cases import CAMERA, write_glb, write_image
+from tests.tiny_checkpoint import write_tiny_checkpoint
 
 MAX_NEW_TOKENS = 4
 
 
 @pytest.fixture(scope="module")
 def checkpoint(tmp_path_factory) -> Path:
-    from flax import nnx
-
-    from jax3dc.model.chat import VL_CHAT_TEMPLATE
-    from jax3dc.model.config import Qwen3VLConfig
-    from jax3dc.model.params import save_pretrained
-    from jax3dc.model.processor import ImageProcessorConfig
-    from jax3dc.model.qwen3_vl import Qwen3VL
-    from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS, load_tokenizer
-
-    config = dataclasses.replace(
-        Qwen3VLConfig.tiny(vocab_size=151936, tie_word_embeddings=True),
-        image_token_id=QWEN_VL_SPECIAL_IDS["<|image_pad|>"], video_token_id=151656,
-        vision_start_token_id=QWEN_VL_SPECIAL_IDS["<|vision_start|>"],
-        vision_end_token_id=QWEN_VL_SPECIAL_IDS["<|vision_end|>"])
-    path = tmp_path_factory.mktemp("tiny_checkpoint")
-    save_pretrained(Qwen3VL(config, rngs=nnx.Rngs(0)), config, path)
-    load_tokenizer().save_pretrained(path, chat_template=VL_CHAT_TEMPLATE)
-    ImageProcessorConfig(patch_size=config.vision.patch_size, merge_size=config.vision.spatial_merge_size,
-                         min_pixels=16 * 16, max_pixels=32 * 32).save_pretrained(path)
-    return path
+    return write_tiny_checkpoint(tmp_path_factory.mktemp("tiny_checkpoint"))
 
 
 @pytest.fixture(scope="module")
