@@ -31,6 +31,14 @@ TASKS = ("structure", "code")
 class UnusableRecord(Jax3dcError):
     """A record that cannot become a training example (bad PNG, no program for the code task)."""
 
+    reason = "corrupt"
+
+
+class MissingProgram(UnusableRecord):
+    """A record without a part program, asked for by the code task."""
+
+    reason = "no_program"
+
 
 @dataclass(frozen=True)
 class ExampleEncoder:
@@ -65,7 +73,7 @@ class ExampleEncoder:
         if self.task == "structure":
             return chat_messages(record.prompt, record.target)
         if not record.program:
-            raise UnusableRecord(f"record {record.key!r} has no part program (code task)")
+            raise MissingProgram(f"record {record.key!r} has no part program (code task)")
         return code_messages(record.program)
 
     def encode(self, record: Record) -> Example:

@@ -88,8 +88,7 @@ class _Decode:
         try:
             return self.encoder.encode(record)
         except UnusableRecord as e:
-            reason = "no_program" if "no part program" in str(e) else "corrupt"
-            return Skipped(record.key, reason, str(e))
+            return Skipped(record.key, e.reason, str(e))
 
 
 class _PackedBatches(grain.IterDataset):
