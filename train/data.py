@@ -35,10 +35,10 @@ def run_processor(cfg: TrainConfig, model: Qwen3VLConfig) -> ImageProcessorConfi
     if os.path.isfile(os.path.join(cfg.init, "preprocessor_config.json")):
         return ImageProcessorConfig.from_pretrained(cfg.init)
     v = model.vision
-    area = cfg.image_size**2 if cfg.image_size else ImageProcessorConfig.min_pixels
-    return ImageProcessorConfig(patch_size=v.patch_size, temporal_patch_size=v.temporal_patch_size,
-                                merge_size=v.spatial_merge_size, min_pixels=area,
-                                max_pixels=max(area, ImageProcessorConfig.max_pixels if not cfg.image_size else area))
+    patches = dict(patch_size=v.patch_size, temporal_patch_size=v.temporal_patch_size, merge_size=v.spatial_merge_size)
+    if not cfg.image_size:
+        return ImageProcessorConfig(**patches)
+    return ImageProcessorConfig(**patches, min_pixels=cfg.image_size**2, max_pixels=cfg.image_size**2)
 
 
 def _synthetic(cfg: TrainConfig, model: Qwen3VLConfig, split: str, padding: bool) -> SyntheticBatches:
