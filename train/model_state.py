@@ -26,7 +26,8 @@ from jax3dc.sharding import model_shardings
 from train.config import ConfigError, TrainConfig
 from train.optimizer import trainable_filter
 from train.parallel import state_shardings
-from train.step import cast_floats, masked_cross_entropy
+from train.loss import token_loss
+from train.step import cast_floats
 
 PRESETS = ("tiny", "small", "qwen3_vl_2b", "qwen3_vl_4b", "qwen3_vl_8b")
 LOSS_CHUNK = 1024  # sequence positions per logits chunk: bounds the [rows, chunk, vocab] buffer
@@ -154,31 +155,12 @@ def model_inputs(micro: dict[str, jax.Array]) -> dict[str, Any]:
 
 
 def score(model: Qwen3VL, micro: dict[str, jax.Array]) -> tuple[jax.Array, jax.Array]:
-    """(sum of masked token NLL, number of correct argmax predictions) for one micro-batch.
-
-    Logits are made LOSS_CHUNK positions at a time and recomputed in the backward pass, so the
-    full [rows, L, vocab] float32 logits never exist at once.
-    """
+    """(sum of masked token NLL, number of correct predictions) for one micro-batch; the LM head
+    is applied LOSS_CHUNK positions at a time and split over the mesh (train/loss.py)."""
     hidden = model(**model_inputs(micro), return_hidden=True)
-    labels, mask = micro["labels"], micro["loss_mask"]
-    rows, length, width = hidden.shape
+    length = hidden.shape[1]
     chunk = LOSS_CHUNK if length % LOSS_CHUNK == 0 else length
-    if chunk == length:
-        return masked_cross_entropy(model.logits(hidden), labels, mask)
-    n = length // chunk
-    split = lambda x: jnp.moveaxis(x.reshape(rows, n, chunk, *x.shape[2:]), 1, 0)
-
-    @jax.checkpoint
-    def one(h, y, m):
-        return masked_cross_entropy(model.logits(h), y, m)
-
-    def body(carry, xs):
-        nll, correct = one(*xs)
-        return (carry[0] + nll, carry[1] + correct), None
-
-    zero = jnp.zeros((), jnp.float32)
-    (nll, correct), _ = jax.lax.scan(body, (zero, zero), (split(hidden), split(labels), split(mask)))
-    return nll, correct
+    return token_loss(hidden.astype(model.dtype), model.output_head(), micro["labels"], micro["loss_mask"], chunk)
 
 
 def vision_params(state: ModelState) -> int:

@@ -60,6 +60,7 @@ from jax3dc.model.layers import Dense
 from jax3dc.model.rope import get_rope_index, text_rope
 from jax3dc.model.text import DecoderLayer, TextModel
 from jax3dc.model.vision import VisionModel
+from jax3dc.model.prefix import prefix_sum
 from jax3dc.sharding import constrain
 
 
@@ -78,9 +79,9 @@ def place_image_tokens(x: jax.Array, image_mask: jax.Array, features: jax.Array,
     so rows with image slots they leave unused (packed training rows) stay aligned."""
     b, seq = image_mask.shape
     if row_start is None:
-        order = jnp.cumsum(image_mask.reshape(-1)) - 1
+        order = prefix_sum(image_mask.reshape(-1)) - 1
     else:
-        order = (row_start[:, None] + jnp.cumsum(image_mask, axis=1) - 1).reshape(-1)
+        order = (row_start[:, None] + prefix_sum(image_mask, axis=1) - 1).reshape(-1)
     order = jnp.clip(order, 0, features.shape[0] - 1)
     placed = features.astype(x.dtype)[order].reshape(b, seq, -1)
     if add:
@@ -143,6 +144,13 @@ class Qwen3VL(nnx.Module):
             dtype=dtype, param_dtype=param_dtype)
 
     # ------------------------------------------------------------------ pieces
+    def output_head(self) -> jax.Array:
+        """The LM head as a [vocab, embed] matrix in the compute dtype (the embedding when tied),
+        for losses that apply it themselves (train/loss.py)."""
+        if self.lm_head is not None:
+            return self.lm_head.kernel.get_value().astype(self.dtype).T
+        return self.language_model.embed_tokens.get_value().astype(self.dtype)
+
     def logits(self, hidden: jax.Array) -> jax.Array:
         if self.lm_head is not None:
             out = self.lm_head(hidden)
