@@ -16,6 +16,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jax3dc.model.prefix import prefix_max, prefix_sum
+
 
 def rotate_half(x: jax.Array) -> jax.Array:
     half = x.shape[-1] // 2
@@ -87,13 +89,13 @@ def get_rope_index(input_ids: jax.Array, image_grid_thw: jax.Array | None, image
     # an image starts where an image token follows a non-image real token
     prev_img = jnp.concatenate([jnp.zeros((b, 1), bool), is_img[:, :-1]], axis=1)
     starts = is_img & ~prev_img
-    image_of_token = jnp.cumsum(starts.reshape(-1)).reshape(b, seq) - 1
+    image_of_token = prefix_sum(starts.reshape(-1)).reshape(b, seq) - 1
     image_of_token = jnp.clip(image_of_token, 0, grid.shape[0] - 1)
     g = grid[image_of_token]  # [B, L, 3]
     gh, gw = g[..., 1] // spatial_merge_size, g[..., 2] // spatial_merge_size
     advance = jnp.where(is_img, jnp.where(starts, jnp.maximum(gh, gw), 0), valid.astype(jnp.int32))
-    before = jnp.cumsum(advance, axis=1) - advance  # position counter just before each token
-    run_start = jax.lax.cummax(jnp.where(starts, idx, 0), axis=1)
+    before = prefix_sum(advance, axis=1) - advance  # position counter just before each token
+    run_start = prefix_max(jnp.where(starts, idx, 0), axis=1)
     k = idx - run_start  # index of the token within its image
     start = jnp.take_along_axis(before, run_start, axis=1)
     plane = jnp.maximum(gh * gw, 1)  # frames of a video advance the temporal id through k // plane
