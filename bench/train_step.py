@@ -28,6 +28,7 @@ def main() -> None:
     ap.add_argument("--attention", default=None, help="jax.nn.dot_product_attention implementation, e.g. cudnn")
     ap.add_argument("--mesh", default="1,-1,1", help="data,fsdp,tensor over all visible devices (-1: the rest)")
     ap.add_argument("--json", help="append the figures as one JSON line to this file")
+    ap.add_argument("--profile", help="after timing, trace 2 steps into this directory and summarise it")
     a = ap.parse_args()
     started = time.perf_counter()
     import jax
@@ -61,6 +62,14 @@ def main() -> None:
         print(f"mfu_vs_989: {flops / peak / jax.device_count():.3f}  mfu_vs_790: {flops / 790e12 / jax.device_count():.3f}")
     peaks = [(d.memory_stats() or {}).get("peak_bytes_in_use", 0) / 2**30 for d in jax.local_devices()]
     print(f"peak_mem_gib per device: max {max(peaks):.1f}")
+    if a.profile:
+        from bench.profile_summary import summarise
+
+        with jax.profiler.trace(a.profile, create_perfetto_trace=True):
+            for i in range(2):
+                m = trainer.train_step(batches[i % 2])
+            to_host(m["loss"])
+        summarise(a.profile, top=20)
     if a.json:
         import json
 
