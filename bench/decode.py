@@ -25,6 +25,9 @@ from dataclasses import dataclass
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults  # noqa: E402
+
+apply_gpu_defaults(GENERATION_GPU_FLAGS)  # what `jax3dc predict` and `eval` decode with
 import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
@@ -94,7 +97,8 @@ def peak_bytes() -> int | None:
     return None if not stats else int(stats.get("peak_bytes_in_use", 0))
 
 
-def run_batch(model, preset: Preset, batch: int, generation: GenerationConfig, prefill_rows: int) -> dict:
+def run_batch(model, preset: Preset, batch: int, generation: GenerationConfig, prefill_rows: int,
+              profile: str | None = None) -> dict:
     ids, pixels, grid, pads = build_prompts(preset, batch)
 
     def once() -> tuple[float, float, np.ndarray]:
@@ -114,6 +118,12 @@ def run_batch(model, preset: Preset, batch: int, generation: GenerationConfig, p
     prefill_s, decode_s, lengths = once()
     generated = int(lengths.sum())
     peak = peak_bytes()
+    if profile:  # a third, traced run: kernel time per kind and launch counts
+        from bench.profile_summary import summarise
+
+        with jax.profiler.trace(profile, create_perfetto_trace=True):
+            once()
+        summarise(profile, top=25)
     return {
         "bench": "decode",
         "batch": batch,
@@ -141,6 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--dtype", choices=("bfloat16", "float32"), default="bfloat16",
                         help="parameter and compute dtype")
     parser.add_argument("--json-out", help="also append the JSON lines to this file")
+    parser.add_argument("--profile", help="trace one more run of the first batch size into this folder and summarise it")
     parser.add_argument("--compile-cache", help="persistent XLA compilation cache folder (faster reruns)")
     args = parser.parse_args(argv)
     if args.compile_cache:
@@ -161,7 +172,8 @@ def main(argv: list[str] | None = None) -> int:
     lines = [header]
     print(json.dumps(header), flush=True)
     for batch in batches:
-        result = {"preset": args.preset, **run_batch(model, preset, batch, generation, prefill_rows)}
+        result = {"preset": args.preset, **run_batch(model, preset, batch, generation, prefill_rows,
+                                                    args.profile if batch == batches[0] else None)}
         target = preset.targets.get(batch)
         if target is not None:
             result["target_tokens_per_s"] = target

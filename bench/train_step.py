@@ -31,9 +31,9 @@ def main() -> None:
     ap.add_argument("--profile", help="after timing, trace 2 steps into this directory and summarise it")
     a = ap.parse_args()
     started = time.perf_counter()
-    from train.xla_flags import apply_gpu_defaults
+    from jax3dc.xla_flags import TRAINING_GPU_FLAGS, apply_gpu_defaults
 
-    apply_gpu_defaults()  # the trainer's collective-combining defaults (train/cli.py sets them too)
+    apply_gpu_defaults(TRAINING_GPU_FLAGS)  # the trainer's collective-combining defaults (train/cli.py sets them too)
     import jax
 
     from train.config import MeshConfig, TrainConfig

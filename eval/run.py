@@ -32,6 +32,9 @@ def _positive(text: str) -> int:
 
 
 def run_eval(args: argparse.Namespace) -> int:
+    from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
+
+    apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
     from data_pipeline.shards import shard_paths
     from eval.generation import Generator, generate_predictions, read_records, reference_of
     from eval.metrics.cases import build_cases, load_predictions

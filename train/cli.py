@@ -26,9 +26,9 @@ def register(subparsers) -> None:
 
 def _run(args) -> int:
     from train.distributed import initialize_from_env
-    from train.xla_flags import apply_gpu_defaults
+    from jax3dc.xla_flags import TRAINING_GPU_FLAGS, apply_gpu_defaults
 
-    apply_gpu_defaults()  # before the backend starts
+    apply_gpu_defaults(TRAINING_GPU_FLAGS)  # before the backend starts
     initialize_from_env()
     overrides = list(args.set)
     for name, value in (("init", args.init), ("output_dir", args.output_dir), ("steps", args.steps)):

@@ -32,6 +32,9 @@ CAMERA_HELP = ("JSON file with the image's camera in the normalised object frame
 
 
 def run(args: argparse.Namespace) -> int:
+    from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
+
+    apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts
     from eval.predict.pipeline import predict
     from eval.predict.segmentation import load_camera
 

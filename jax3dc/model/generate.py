@@ -145,9 +145,16 @@ def _decode(graphdef, state, logits: jax.Array, cache, rope_deltas: jax.Array, k
     return Generated(tokens, lengths), cache
 
 
+CACHE_MULTIPLE = 128
+
+
 def cache_capacity(prompt_length: int, max_new_tokens: int) -> int:
-    """Slots needed: the prompt plus every generated token but the last (it is never fed back)."""
-    return prompt_length + max_new_tokens - 1
+    """Slots needed — the prompt plus every generated token but the last (it is never fed back) —
+    rounded up to a multiple of CACHE_MULTIPLE. Why round: XLA pads the sequence axis of bf16
+    attention matmuls to a multiple of 8, which on an odd-sized cache copied every layer's keys and
+    values once per decode step (0.14 ms of 4.1 ms at 4B, batch 1). Unused slots stay masked."""
+    needed = prompt_length + max_new_tokens - 1
+    return -(-needed // CACHE_MULTIPLE) * CACHE_MULTIPLE
 
 
 def prefill(model, input_ids, attention_mask=None, pixel_values=None, image_grid_thw=None,

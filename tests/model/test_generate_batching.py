@@ -143,9 +143,12 @@ def test_generation_config_rejects_nonsense() -> None:
 
 
 def test_decode_refuses_a_cache_too_small(tiny) -> None:
-    from jax3dc.model.generate import decode, prefill
+    from jax3dc.model.generate import CACHE_MULTIPLE, decode, prefill
 
     model, config = tiny
     state = prefill(model, np.array([[1, 2, 3]]), max_new_tokens=4)
-    with pytest.raises(ValueError, match="prefill with max_new_tokens >= 5"):
-        decode(model, state, GenerationConfig(max_new_tokens=5, stop_ids=(), pad_id=0))
+    slots = state.cache.valid.shape[1]
+    assert slots % CACHE_MULTIPLE == 0 and slots >= 3 + 4 - 1  # rounded up, never below the need
+    too_many = slots - 3 + 2  # one more slot than the cache holds
+    with pytest.raises(ValueError, match=f"prefill with max_new_tokens >= {too_many}"):
+        decode(model, state, GenerationConfig(max_new_tokens=too_many, stop_ids=(), pad_id=0))
