@@ -29,7 +29,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seeds", type=int, default=1, help="seeds per factory category (default %(default)s)")
     parser.add_argument("--categories", default="", help="comma list of factory categories (default: all)")
-    parser.add_argument("--fixtures", type=Path, default=DEFAULT_FIXTURES,
+    parser.add_argument("--fixtures", default=str(DEFAULT_FIXTURES),
                         help="folder of PartNet-Mobility objects (default %(default)s; '' for none)")
     parser.add_argument("--details", type=Path, help="write flagged ground-truth joints and missed mutations (JSON lines)")
     parser.add_argument("--no-mutations", action="store_true", help="false alarms only")
@@ -42,7 +42,7 @@ def main() -> None:
     from eval.physics.ground_truth import factory_objects, false_alarms, imported_objects, mutation_detection
 
     categories = [c for c in args.categories.split(",") if c] or sorted(FACTORIES)
-    fixtures = sorted(d for d in args.fixtures.iterdir() if d.is_dir()) if str(args.fixtures) and args.fixtures.is_dir() else []
+    fixtures = sorted(d for d in Path(args.fixtures).iterdir() if d.is_dir()) if args.fixtures and Path(args.fixtures).is_dir() else []
     objects = list(factory_objects(categories, range(args.seeds))) + list(imported_objects(fixtures))
     details = open(args.details, "w") if args.details else None
     t0 = time.perf_counter()

@@ -229,15 +229,36 @@ def lamp(w: ProgramWriter, rng: np.random.Generator) -> None:
     # the lower arm stops short of the elbow, where the upper arm's hinge pin sits
     elbow = tuple(b - 0.022 * (b - a) / l1 for a, b in zip(p0, p1))
     base_pin = w.cylinder(0.012, 0.03, p0, axis="x", segments=12)
+    shade_h, shade_r = u(rng, 0.1, 0.16), u(rng, 0.06, 0.1)
+    drop1, drop2 = _lamp_head_drops(p0[2], l1, a1, l2, a2, math.hypot(shade_h, shade_r) + 0.011)
     lower = w.part("lower_arm", w.combine(base_pin, kit.rod(w, p0, elbow, 0.01)), metal, parent=base,
-                   joint=JointSpec("hinge", (1.0, 0.0, 0.0), p0, (-0.6, 0.6)))
+                   joint=JointSpec("hinge", (1.0, 0.0, 0.0), p0, (-0.6, drop1)))
     pin = w.cylinder(0.012, 0.03, p1, axis="x", segments=12)
     upper = w.part("upper_arm", w.combine(pin, kit.rod(w, p1, p2, 0.008)), metal, parent=lower,
-                   joint=JointSpec("hinge", (1.0, 0.0, 0.0), p1, (-0.8, 0.3)))  # +: the head drops
-    shade_h, shade_r = u(rng, 0.1, 0.16), u(rng, 0.06, 0.1)
+                   joint=JointSpec("hinge", (1.0, 0.0, 0.0), p1, (-0.8, drop2)))  # +: the head drops
     shade = w.cone(shade_r, shade_r * 0.3, shade_h, (0.0, p2[1], p2[2] - shade_h / 2 - 0.011), segments=24)
     w.part("shade", shade, shade_mat, parent=upper,  # pivots about the top of the shade, under the arm's end
            joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, p2[1], p2[2] - 0.011), (-0.6, 0.6)))
+
+
+LAMP_SHADE_CLEARANCE_M = 0.01  # the shade stops this far above the desk, whatever the arms' poses
+
+
+def _lamp_head_drops(pin_z: float, l1: float, a1: float, l2: float, a2: float, head_reach: float) -> tuple[float, float]:
+    """The largest forward (+, head-lowering) angles of the lower and upper arm (rad, at most 0.6
+    and 0.3) with which the shade, anywhere within ``head_reach`` of the upper arm's end, stays
+    LAMP_SHADE_CLEARANCE_M above the desk in every pose of both arms: a real lamp's arms stop
+    where the head would meet the desk. The upper arm's stop is chosen first with the lower arm at
+    rest, then the lower arm's with the upper arm at that stop (the lowest head)."""
+    def head_low(t1: float, t2: float) -> float:
+        return pin_z + l1 * math.sin(a1 - t1) + l2 * math.sin(a2 - t1 - t2) - head_reach
+
+    def largest(ok) -> float:
+        return max((t for t in np.linspace(0.0, 0.6, 61) if ok(t)), default=0.0)
+
+    drop2 = largest(lambda t: t <= 0.3 + 1e-9 and head_low(0.0, t) >= LAMP_SHADE_CLEARANCE_M)
+    drop1 = largest(lambda t: head_low(t, drop2) >= LAMP_SHADE_CLEARANCE_M)
+    return round(float(drop1), 2), round(float(drop2), 2)
 
 
 def suitcase(w: ProgramWriter, rng: np.random.Generator) -> None:
