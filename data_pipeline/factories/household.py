@@ -213,8 +213,10 @@ def faucet(w: ProgramWriter, rng: np.random.Generator) -> None:
     lever_z = 0.02 + body_h * 0.7
     hub = w.cylinder(pipe_r * 0.9, 0.02, (0.0, pipe_r + 0.01, lever_z), axis="y", segments=16)
     arm = kit.rod(w, (0.0, pipe_r + 0.02, lever_z), (0.0, pipe_r + 0.02 + 0.06, lever_z + 0.03), 0.005)
+    # a side lever turns about its hub's own axis: the hub spins in place beside the column (about
+    # the column's tangent its end face swung 8 mm into the column and jammed)
     w.part("lever", w.combine(hub, arm), lever_mat, parent=body,
-           joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, pipe_r + 0.01, lever_z), (0.0, 0.6)))
+           joint=JointSpec("hinge", (0.0, 1.0, 0.0), (0.0, pipe_r + 0.01, lever_z), (0.0, 0.6)))
 
 
 def lamp(w: ProgramWriter, rng: np.random.Generator) -> None:

@@ -228,4 +228,21 @@ def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], par
         rel = points - pivot
         return float(np.min(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
 
-    return line_distance(parts[part]) <= ATTACH_TOL_NU and line_distance(parts[node.parent]) <= ATTACH_TOL_NU
+    # the parent is the rigid body it is welded into: a stapler's arm parented to the base hinges on
+    # the block fixed to that base, the same body in a simulator
+    holder = min(line_distance(parts[p]) for p in _welded(structure, node.parent))
+    return line_distance(parts[part]) <= ATTACH_TOL_NU and holder <= ATTACH_TOL_NU
+
+
+def _welded(structure: Structure, part: int) -> set[int]:
+    """The parts rigidly joined to ``part`` (itself, and through unjointed parent/child links)."""
+    out, stack = {part}, [part]
+    while stack:
+        p = stack.pop()
+        node = structure.nodes[p]
+        linked = list(structure.children(p)) + ([node.parent] if node.parent is not None and node.joint is None else [])
+        for q in linked:
+            if q not in out and (q == node.parent or structure.nodes[q].joint is None):
+                out.add(q)
+                stack.append(q)
+    return out
