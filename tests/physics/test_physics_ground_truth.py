@@ -74,8 +74,10 @@ def test_mutations_that_keep_the_motion_are_told_apart():
     assert not changes_motion(oven.structure, _mutation(oven, "range doubled", knob), oven.parts)
     assert changes_motion(oven.structure, _mutation(oven, "pivot moved", knob), oven.parts)
     lamp = generate_object("lamp", 0)
-    arm = _part_named(lamp, "lower_arm")  # swings ±0.6 rad about rest: flipping it reaches the same poses
-    assert not changes_motion(lamp.structure, _mutation(lamp, "flipped axis", arm), lamp.parts)
+    shade = _part_named(lamp, "shade")  # swings ±0.6 rad about rest: flipping it reaches the same poses
+    assert not changes_motion(lamp.structure, _mutation(lamp, "flipped axis", shade), lamp.parts)
+    arm = _part_named(lamp, "lower_arm")  # stops short of the desk forward, not backward: flipping it changes the poses
+    assert changes_motion(lamp.structure, _mutation(lamp, "flipped axis", arm), lamp.parts)
     cabinet = generate_object("cabinet", 0)
     door = next(p for p, n in cabinet.structure.nodes.items() if n.joint is not None)
     for kind in ("flipped axis", "range doubled", "hinge-slide swapped", "pivot moved"):
