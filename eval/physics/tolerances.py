@@ -9,6 +9,7 @@ FLOOR_TOL_NU = 0.025  # a joint driving a part this far below the rest pose's lo
 FLOOR_CONTACT_NU = 0.01  # a moved subtree this close to the floor at rest carries the object: moving it tips it over
 REST_PENETRATION_TOL_NU = 0.05  # at rest: real meshes interlock at hinges (a bucket handle through its lugs)
 ATTACH_TOL_NU = 0.07  # the pivot lies within this distance of the child AND of its parent
+REST_CONTACT_TOL_NU = 0.05  # at rest a jointed part's body is this close to its parent's (ground truth: at most 0.027, a desk fan's head on its neck)
 DETACH_TOL_NU = 0.2  # a moving child farther than this from its parent (all geoms) is detached
 LIFT_OFF_MAX_NU = 0.5  # a slide that parts a child from its parent (a lid lifted off) may open this gap (PartNet-Mobility pot lids: ~0.35)
 SLIDE_GUIDE_OVERLAP_NU = 0.05  # a slide child overlapping its parent this much along the axis at rest runs in a guide it must not leave

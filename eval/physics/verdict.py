@@ -4,7 +4,8 @@ Reasons are short stable strings: "penetrates parent at rest", "penetrates part 
 "penetrates part P (passes through it) at q=V" (a thin board driven through another, see ``crossing``),
 "penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part, or carries it into P),
 "penetrates the floor at q=V" (below the rest pose's lowest point, where the gravity test's floor is),
-"detached from parent at q=V", "pivot detached", "limit unreachable: lo|hi", and object-level
+"detached from parent at q=V", "detached from parent at rest (gap G nu)" (a joint needs its two bodies
+to meet: REST_CONTACT_TOL_NU), "pivot detached", "limit unreachable: lo|hi", and object-level
 "rest interpenetration: parts A,B" (fails the object), "combination interpenetration: parts A,B"
 (reported only), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
 """
@@ -22,8 +23,8 @@ from eval.physics.dynamics import gravity, reachability, tolerated_pairs
 from eval.physics.floor import first_below_floor
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
-from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_PENETRATION_TOL_NU,
-                                     LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
+from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_CONTACT_TOL_NU,
+                                     REST_PENETRATION_TOL_NU, LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
 from jax3dc.structure.schema import Structure
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
@@ -161,6 +162,12 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
             out = [v for v in values_nu if overlap(v) <= 0.0]  # a drawer or rack in its guide must stay in it
             if out:
                 reasons[part].append(f"detached from parent (slides out of its guide) at q={out[0]:.3f}")
+        # a joint connects two bodies that meet: a part given a parent it does not touch at rest (a
+        # drawer hung on the drawer beside it, which would carry it out of its own slot) is not held by it
+        gap = float(np.min(proximity[0][np.ix_(group == group[child], parent_group)], initial=np.inf)) / scale
+        if gap > REST_CONTACT_TOL_NU:
+            shown = f"{gap:.3f} nu" if np.isfinite(gap) else f"over {DETACH_TOL_NU} nu"
+            reasons[part].append(f"detached from parent at rest (gap {shown})")
         if not _pivot_attached(structure, parts, part):
             reasons[part].append("pivot detached")
     combos = states.joint == -2

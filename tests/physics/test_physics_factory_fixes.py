@@ -83,3 +83,37 @@ def test_pivot_on_a_welded_sibling_is_attached_but_off_every_part_is_not():
     lifted = dataclasses.replace(s.nodes[arm].joint, pivot=tuple(pivot + np.array([0.0, 0.0, 0.3])))
     nodes[arm] = dataclasses.replace(s.nodes[arm], joint=lifted)
     assert not _pivot_attached(dataclasses.replace(s, nodes=nodes), parts, arm)
+
+
+# --- a jointed part must touch its parent at rest (REST_CONTACT_TOL_NU) ------------------------
+
+def _surface_gap(a, b) -> float:
+    """Nearest distance between surface samples of two meshes (an upper bound of the true gap)."""
+    from scipy.spatial import cKDTree
+    pa = np.concatenate([a.vertices, a.sample(4000, seed=0)])
+    pb = np.concatenate([b.vertices, b.sample(4000, seed=0)])
+    return float(cKDTree(pb).query(pa)[0].min())
+
+
+def test_part_given_a_parent_it_does_not_touch_is_detached_at_rest():
+    from eval.physics.ground_truth import changes_motion
+    from eval.physics.mutations import mutations_of
+    from eval.physics.tolerances import REST_CONTACT_TOL_NU
+    dishwasher = generate_object("dishwasher", 0)
+    s, parts = dishwasher.structure, dishwasher.parts
+    truth = check_object(s, parts, dishwasher.scale_m_per_nu, dynamics=False)
+    assert not any(r.startswith("detached from parent at rest") for j in truth["joints"].values() for r in j["reasons"])
+    caught = 0
+    for m in mutations_of(s, parts):
+        if m.kind != "wrong parent" or not changes_motion(s, m, parts):
+            continue
+        new_parent = m.structure.nodes[m.part].parent
+        reasons = check_object(m.structure, parts, dishwasher.scale_m_per_nu, dynamics=False)["joints"][str(m.part)]["reasons"]
+        gap = [r for r in reasons if r.startswith("detached from parent at rest")]
+        reference = _surface_gap(parts[m.part], parts[new_parent])
+        assert bool(gap) == (reference > REST_CONTACT_TOL_NU + 0.01) or abs(reference - REST_CONTACT_TOL_NU) < 0.01
+        if gap:  # the simulator's hull distance agrees with the sampled surfaces (hulls can only be closer)
+            shown = float(gap[0].split("gap ")[1].split(" ")[0])
+            assert REST_CONTACT_TOL_NU < shown <= reference + 1e-3
+            caught += 1
+    assert caught >= 1
