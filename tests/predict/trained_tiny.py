@@ -34,26 +34,27 @@ class TrainedRun:
     last_loss: float
 
 
-def sources(train_objects: int, seed_base: int = 7_000) -> tuple[list[SourceSpec], SourceSpec]:
-    """``train_objects`` train-split objects of CATEGORY and the first test-split object after them."""
+def sources(train_objects: int, seed_base: int = 7_000) -> tuple[list[SourceSpec], SourceSpec, SourceSpec]:
+    """``train_objects`` train-split objects of CATEGORY, then the first val-split object (`jax3dc
+    train` validates on the last step) and the first test-split object (the held-out input)."""
     train: list[SourceSpec] = []
-    held_out = None
+    found: dict[str, SourceSpec] = {}
     seed = seed_base
-    while len(train) < train_objects or held_out is None:
+    while len(train) < train_objects or len(found) < 2:
         spec = SourceSpec("factory", object_id(CATEGORY, seed), category=CATEGORY, seed=seed)
         split = split_of(spec.object_id)
         if split == "train" and len(train) < train_objects:
             train.append(spec)
-        elif split == "test" and held_out is None:
-            held_out = spec
+        elif split != "train":
+            found.setdefault(split, spec)
         seed += 1
-    return train, held_out
+    return train, found["val"], found["test"]
 
 
 def build_data(out: Path, train_objects: int) -> SourceSpec:
-    """Renders the train objects (1 view each) and the held-out test object; returns the latter."""
-    train, held_out = sources(train_objects)
-    run_build(out, [*train, held_out], BuildConfig(views=1, seed=0, size=RENDER_SIZE, objects_per_shard=64),
+    """Renders the train, val and held-out test objects (1 view each); returns the test object."""
+    train, val, held_out = sources(train_objects)
+    run_build(out, [*train, val, held_out], BuildConfig(views=1, seed=0, size=RENDER_SIZE, objects_per_shard=64),
               workers=1, progress=False)
     return held_out
 
@@ -69,7 +70,7 @@ def train_model(data: Path, tokenizer: Path, out: Path, task: str, steps: int, l
     """`jax3dc train` of the `tiny` preset from scratch; the HF export lands in ``out/hf``."""
     settings = [f"data={data}", f"tokenizer={tokenizer}", f"task={task}", f"image_size={TRAIN_IMAGE}",
                 f"seq_len={seq_len}", f"batch_size={batch_size}", "grad_accum=1", "pack=1", f"lr={lr}",
-                "warmup_steps=5", "end_lr_ratio=0.3", "freeze=", "compute_dtype=float32", "remat=none",
+                "warmup_steps=5", "end_lr_ratio=1.0", "freeze=", "compute_dtype=float32", "remat=none",
                 "log_every=10", f"eval_every={steps + 1000}", "eval_batches=1", f"save_every={steps + 1000}"]
     started = time.perf_counter()
     argv = ["train", "--init", "tiny", "--output-dir", str(out), "--steps", str(steps)]
