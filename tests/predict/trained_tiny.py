@@ -66,11 +66,11 @@ def train_tokenizer(data: Path, out: Path, vocab_size: int = 512) -> Path:
 
 
 def train_model(data: Path, tokenizer: Path, out: Path, task: str, steps: int, lr: float = 3e-3,
-                seq_len: int = 512, batch_size: int = 4) -> TrainedRun:
+                seq_len: int = 512, batch_size: int = 4, end_lr_ratio: float = 0.1) -> TrainedRun:
     """`jax3dc train` of the `tiny` preset from scratch; the HF export lands in ``out/hf``."""
     settings = [f"data={data}", f"tokenizer={tokenizer}", f"task={task}", f"image_size={TRAIN_IMAGE}",
                 f"seq_len={seq_len}", f"batch_size={batch_size}", "grad_accum=1", "pack=1", f"lr={lr}",
-                "warmup_steps=5", "end_lr_ratio=1.0", "freeze=", "compute_dtype=float32", "remat=none",
+                "warmup_steps=5", f"end_lr_ratio={end_lr_ratio}", "freeze=", "compute_dtype=float32", "remat=none",
                 "log_every=10", f"eval_every={steps + 1000}", "eval_batches=1", f"save_every={steps + 1000}"]
     started = time.perf_counter()
     argv = ["train", "--init", "tiny", "--output-dir", str(out), "--steps", str(steps)]
