@@ -94,24 +94,28 @@ class _Decode:
 class _PackedBatches(grain.IterDataset):
     """Examples -> (batch, skip counts since the previous batch)."""
 
-    def __init__(self, parent: grain.IterDataset, layout: RowLayout, rows: int):
+    def __init__(self, parent: grain.IterDataset, layout: RowLayout, rows: int, dry_limit: int, what: str):
         super().__init__(parent)
-        self.layout, self.rows = layout, rows
+        self.layout, self.rows, self.dry_limit, self.what = layout, rows, dry_limit, what
 
     def __iter__(self) -> "_PackedBatchIterator":
-        return _PackedBatchIterator(self._parent.__iter__(), self.layout, self.rows)
+        return _PackedBatchIterator(self._parent.__iter__(), self.layout, self.rows, self.dry_limit, self.what)
 
 
 class _PackedBatchIterator(grain.DatasetIterator):
     """Greedy, in-order packing. An example that does not fit the last row of a batch opens the
     next batch; the state then points just before it (the parent's state taken before pulling
-    it), so a restored iterator reads it again instead of needing it stored."""
+    it), so a restored iterator reads it again instead of needing it stored.
 
-    def __init__(self, parent: grain.DatasetIterator, layout: RowLayout, rows: int):
+    The records repeat forever, so a split with no usable record would be read forever: after
+    ``dry_limit`` skipped records in a row (more than a full pass) it raises LoaderError."""
+
+    def __init__(self, parent: grain.DatasetIterator, layout: RowLayout, rows: int, dry_limit: int, what: str):
         super().__init__(parent)
-        self.layout, self.rows = layout, rows
+        self.layout, self.rows, self.dry_limit, self.what = layout, rows, dry_limit, what
         self._carry: Example | None = None
         self._carry_state: dict | None = None
+        self._dry: Counter = Counter()  # skipped records since the last usable one
 
     def _pull(self) -> tuple[Example | Skipped, dict | None]:
         if self._carry is not None:
@@ -134,12 +138,15 @@ class _PackedBatchIterator(grain.DatasetIterator):
                 if not rows and not current:
                     raise
                 break
-            if isinstance(item, Skipped):
-                skipped[item.reason] += 1
+            if isinstance(item, Skipped) or len(item) > L:
+                reason = item.reason if isinstance(item, Skipped) else "too_long"
+                skipped[reason] += 1
+                self._dry[reason] += 1
+                if sum(self._dry.values()) > self.dry_limit:
+                    counts = ", ".join(f"{n} {r}" for r, n in sorted(self._dry.items()))
+                    raise LoaderError(f"{self.what}: no usable record in more than a full pass over them ({counts})")
                 continue
-            if len(item) > L:
-                skipped["too_long"] += 1
-                continue
+            self._dry.clear()
             if current and (used + len(item) > L or len(current) == pack):
                 rows.append(current)
                 current, used = [], 0
@@ -184,14 +191,23 @@ def row_layout(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
                      merge=model.vision.spatial_merge_size, pixel_dtype=cfg.pixel_dtype)
 
 
-def _source(path_list: Sequence[Path], cfg: LoaderConfig) -> grain.MapDataset:
+def _source(path_list: Sequence[Path], cfg: LoaderConfig) -> tuple[grain.MapDataset, int]:
+    """This process's records of one dataset, repeated forever, and how many there are."""
     ds = grain.MapDataset.source(grain.sources.ArrayRecordDataSource([str(p) for p in path_list]))
     if len(ds) < cfg.process_count:
         raise LoaderError(f"{len(ds)} records cannot be shared by {cfg.process_count} processes")
     ds = ds[cfg.process_index::cfg.process_count]  # disjoint slices that together cover the data
     if cfg.shuffle:
         ds = ds.shuffle(seed=cfg.seed)
-    return ds.repeat(None)
+    return ds.repeat(None), len(ds)
+
+
+def _full_pass(lengths: Sequence[int], weights: Sequence[float]) -> int:
+    """Draws from the mixture after which every source (``lengths`` records each) has been read
+    through at least once, twice over for the mixture's rounding: a bound on skips in a row."""
+    weights = list(weights) or [1.0] * len(lengths)
+    total = sum(weights)
+    return 2 * max(int(np.ceil(n * total / w)) for n, w in zip(lengths, weights) if w > 0) + 16
 
 
 def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
@@ -208,11 +224,12 @@ def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
     if not 0 <= cfg.process_index < cfg.process_count:
         raise LoaderError(f"process {cfg.process_index} of {cfg.process_count}")
     layout = row_layout(cfg, model, tokenizer, processor)
-    sources = [_source(shard_paths([s], cfg.split), cfg) for s in cfg.sources]
-    mixed = sources[0] if len(sources) == 1 else grain.MapDataset.mix(sources, list(cfg.weights) or None)
+    sources, lengths = zip(*(_source(shard_paths([s], cfg.split), cfg) for s in cfg.sources))
+    mixed = sources[0] if len(sources) == 1 else grain.MapDataset.mix(list(sources), list(cfg.weights) or None)
     encoder = ExampleEncoder(tokenizer, processor, layout.merge, cfg.task, cfg.image_size)
     examples = mixed.map(_Decode(encoder, cfg.split))
-    batches = _PackedBatches(examples.to_iter_dataset(), layout, cfg.rows)
+    what = f"split {cfg.split!r} ({cfg.task} task) of {', '.join(cfg.sources)} ({sum(lengths)} records)"
+    batches = _PackedBatches(examples.to_iter_dataset(), layout, cfg.rows, _full_pass(lengths, cfg.weights), what)
     if cfg.workers > 0:
         from absl import flags  # grain workers read absl flags; unparsed flags make them fail
 

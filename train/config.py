@@ -73,7 +73,7 @@ class TrainConfig:
     # Cadence (in optimiser steps).
     log_every: int = 10
     eval_every: int = 200
-    eval_batches: int = 4
+    eval_batches: int = 4  # validation batches per evaluation; 0: train without validation
     save_every: int = 200
     keep_last: int = 3
     export_hf: bool = True  # write the final model as an HF directory in output_dir/hf
@@ -165,5 +165,7 @@ def validate(cfg: TrainConfig) -> None:
     for name in ("steps", "seq_len", "log_every", "eval_every", "save_every", "keep_last"):
         if getattr(cfg, name) <= 0:
             raise ConfigError(f"{name} must be positive, got {getattr(cfg, name)}")
+    if cfg.eval_batches < 0:
+        raise ConfigError(f"eval_batches must be >= 0, got {cfg.eval_batches}")
     if cfg.warmup_steps < 0 or cfg.warmup_steps >= cfg.steps:
         raise ConfigError(f"warmup_steps {cfg.warmup_steps} must be in [0, steps={cfg.steps})")

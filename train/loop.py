@@ -159,6 +159,8 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
             f.write(to_json(cfg))
     trainer = Trainer(cfg, attention_impl)
     loader = make_loader(cfg, trainer.model.config, "train", trainer.tokenizer, trainer.processor)
+    if cfg.eval_batches:  # a validation split without records must stop the run now, not after training
+        _check_val_data(cfg, trainer)
     ckpt = RunCheckpoints(os.path.join(out, "checkpoints"), cfg.keep_last)
     start = ckpt.latest_step() or 0
     log = MetricsLog(out, total_steps=cfg.steps, first_step=start, enabled=lead)
@@ -206,7 +208,7 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                 values.update({f"skipped_{k}": float(v) for k, v in getattr(loader, "skipped", {}).items()})
                 log.write(step, values)
             val_loss = None
-            if step % cfg.eval_every == 0 or last:
+            if cfg.eval_batches and (step % cfg.eval_every == 0 or last):
                 val_loss = trainer.validate(make_loader(cfg, trainer.model.config, "val", trainer.tokenizer, trainer.processor), cfg.eval_batches)
                 best_val = val_loss if best_val is None else min(best_val, val_loss)
                 log.write(step, {"loss": val_loss}, kind="val")
@@ -228,6 +230,17 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
     if lead and step > start:
         plot_losses(out)
     return RunResult(step, last_loss, best_val, out)
+
+
+def _check_val_data(cfg: TrainConfig, trainer: Trainer) -> None:
+    """Reads one validation batch; the loader's error is re-raised with how to go on without."""
+    from data_pipeline.loader import LoaderError
+
+    try:
+        next(make_loader(cfg, trainer.model.config, "val", trainer.tokenizer, trainer.processor))
+    except LoaderError as e:
+        raise LoaderError(f"validation data: {e}. Give it with --set val_data=DIR, or train without "
+                          "validation with --set eval_batches=0") from None
 
 
 def _out_of_time(deadline: float | None) -> bool:

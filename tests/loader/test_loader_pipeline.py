@@ -62,7 +62,7 @@ def test_process_slices_are_disjoint_and_cover(dataset: Path) -> None:
     for index in range(3):
         cfg = LoaderConfig(sources=(str(dataset),), seq_len=SEQ, rows=ROWS, image_size=IMAGE,
                            process_index=index, process_count=3, shuffle=True)
-        ds = _source(paths, cfg)
+        ds, _ = _source(paths, cfg)
         size = 6 if index == 0 else 5  # 16 records over 3 processes
         epoch = [decode_record(ds[i]).key for i in range(size)]
         assert len(set(epoch)) == size and set(epoch) == {decode_record(ds[size + i]).key for i in range(size)}
@@ -88,13 +88,23 @@ def test_corrupt_and_too_long_records_are_skipped_and_counted(tmp_path: Path) ->
     assert restored.skipped == it.skipped
 
 
+def test_a_split_without_usable_records_is_an_error_not_a_hang(dataset: Path, tmp_path: Path) -> None:
+    """The records repeat forever: a split that has none (all train here) or only broken ones
+    must end with an error naming the split and what was skipped, not loop."""
+    with pytest.raises(LoaderError, match=r"split 'val' .*\(16 records\): no usable record.*other_split"):
+        next(loader([dataset], split="val"))
+    write_shard(tmp_path / "train-00000.array_record", [b"garbage"] * 3)
+    with pytest.raises(LoaderError, match=r"no usable record.*corrupt"):
+        next(loader([tmp_path]))
+
+
 def test_mixture_follows_the_weights(tmp_path: Path) -> None:
     a = write_dataset(tmp_path / "a", [record(c, 0) for c in CATEGORIES[:4]], shards=1)
     b = write_dataset(tmp_path / "b", [record(c, 1) for c in CATEGORIES[4:]], shards=1)
     cfg = LoaderConfig(sources=(str(a), str(b)), weights=(3.0, 1.0), seq_len=SEQ, rows=ROWS, image_size=IMAGE)
     import grain
 
-    mixed = grain.MapDataset.mix([_source(shard_paths([a], "train"), cfg), _source(shard_paths([b], "train"), cfg)],
+    mixed = grain.MapDataset.mix([_source(shard_paths([a], "train"), cfg)[0], _source(shard_paths([b], "train"), cfg)[0]],
                                  list(cfg.weights))
     seeds = Counter(decode_record(mixed[i]).key.split("_")[-1].split("/")[0] for i in range(400))
     assert abs(seeds["000000"] / 400 - 0.75) < 0.02

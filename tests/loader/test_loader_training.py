@@ -3,6 +3,7 @@ position, and the exported model generates from prompts encoded exactly as in tr
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -64,3 +65,18 @@ def test_time_limit_stops_saves_exports_and_plots(tmp_path: Path) -> None:
     assert ckpt.latest_step() == 1
     ckpt.close()
     assert (tmp_path / "hf" / "config.json").is_file() and (tmp_path / "loss.png").stat().st_size > 1000
+
+
+def test_missing_validation_split_stops_before_training(tmp_path: Path) -> None:
+    """Shards with train records only: the run refuses before its first step (it used to read the
+    repeating records forever at the first validation); with eval_batches=0 it trains."""
+    from data_pipeline.loader import LoaderError
+    from train.loop import run
+
+    data = write_dataset(tmp_path / "ds", [record(c, 0) for c in CATEGORIES[:2]], shards=1)
+    steps: list[int] = []
+    with pytest.raises(LoaderError, match=r"validation data: split 'val'.*no usable record.*eval_batches=0"):
+        run(config(data, tmp_path / "run", 2), on_step=lambda s, m: steps.append(s))
+    assert steps == [] and not (tmp_path / "run" / "checkpoints").exists()
+    result = run(dataclasses.replace(config(data, tmp_path / "run", 2), eval_batches=0))
+    assert result.final_step == 2 and result.best_val_loss is None
