@@ -5,7 +5,8 @@ Reasons are short stable strings: "penetrates parent at rest", "penetrates part 
 "penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part, or carries it into P),
 "penetrates the floor at q=V" (below the rest pose's lowest point, where the gravity test's floor is),
 "detached from parent at q=V", "detached from parent at rest (gap G nu)" (a joint needs its two bodies
-to meet: REST_CONTACT_TOL_NU), "pivot detached", "limit unreachable: lo|hi", and object-level
+to meet: REST_CONTACT_TOL_NU), "detached from its guide (part G, ...)" (a slide child carried out of the
+part it runs in, see ``guides``), "pivot detached", "limit unreachable: lo|hi", and object-level
 "rest interpenetration: parts A,B" (fails the object), "combination interpenetration: parts A,B"
 (reported only), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
 """
@@ -21,6 +22,7 @@ from eval.physics import cpu_backend
 from eval.physics.crossing import crossings
 from eval.physics.dynamics import gravity, reachability, tolerated_pairs
 from eval.physics.floor import first_below_floor
+from eval.physics.guides import carried_out_of_guide, welded
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
 from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_CONTACT_TOL_NU,
@@ -162,6 +164,11 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
             out = [v for v in values_nu if overlap(v) <= 0.0]  # a drawer or rack in its guide must stay in it
             if out:
                 reasons[part].append(f"detached from parent (slides out of its guide) at q={out[0]:.3f}")
+        carried = carried_out_of_guide(structure, parts, part)  # a drawer hung on its neighbour leaves its slot
+        if carried is not None and not any(r.startswith("detached") for r in reasons[part]):
+            guide, values = carried
+            opened = ", ".join(f"joint {p} at {v:.3f}" for p, v in values.items())
+            reasons[part].append(f"detached from its guide (part {guide}, runs out of it with {opened})")
         # a joint connects two bodies that meet: a part given a parent it does not touch at rest (a
         # drawer hung on the drawer beside it, which would carry it out of its own slot) is not held by it
         gap = float(np.min(proximity[0][np.ix_(group == group[child], parent_group)], initial=np.inf)) / scale
@@ -237,19 +244,5 @@ def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], par
 
     # the parent is the rigid body it is welded into: a stapler's arm parented to the base hinges on
     # the block fixed to that base, the same body in a simulator
-    holder = min(line_distance(parts[p]) for p in _welded(structure, node.parent))
+    holder = min(line_distance(parts[p]) for p in welded(structure, node.parent))
     return line_distance(parts[part]) <= ATTACH_TOL_NU and holder <= ATTACH_TOL_NU
-
-
-def _welded(structure: Structure, part: int) -> set[int]:
-    """The parts rigidly joined to ``part`` (itself, and through unjointed parent/child links)."""
-    out, stack = {part}, [part]
-    while stack:
-        p = stack.pop()
-        node = structure.nodes[p]
-        linked = list(structure.children(p)) + ([node.parent] if node.parent is not None and node.joint is None else [])
-        for q in linked:
-            if q not in out and (q == node.parent or structure.nodes[q].joint is None):
-                out.add(q)
-                stack.append(q)
-    return out
