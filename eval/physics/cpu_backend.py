@@ -1,7 +1,9 @@
 """C MuJoCo evaluation of the checks: the default path on machines without an accelerator.
 
-Kinematic checks need only ``mj_kinematics`` + ``mj_collision`` per state (threads, one MjData
-each); dynamic checks use ``mujoco.rollout`` (threaded C rollouts).
+Kinematic checks need only ``mj_kinematics`` + ``mj_collision`` per state (one MjData per thread
+or worker process); dynamic checks use ``mujoco.rollout`` (threaded C rollouts). For the
+penetration check alone, rollout with distance sensors is the path without the GIL
+(``pair_depths_rollout``; ``bench/physics.py`` times it against the processes).
 """
 
 from __future__ import annotations
@@ -72,13 +74,72 @@ def _worker_chunk(qpos: np.ndarray) -> np.ndarray:
     return pair_distances(_WORKER_MODEL, qpos)
 
 
-def pair_distances_processes(xml: str, assets: dict[str, bytes], qpos: np.ndarray,
-                             workers: int | None = None) -> np.ndarray:
+class PairDistancePool:
     """``pair_distances`` over worker processes, one model each: the per-state C calls hold the GIL,
-    so threads do not scale and processes are the fastest C path on a many-core machine."""
-    import multiprocessing as mp
+    so threads do not scale and processes do. ``start`` is apart from ``map`` so that a benchmark
+    can time the work without the pool's start-up."""
 
-    workers = workers or os.cpu_count() or 1
-    chunks = np.array_split(qpos, workers * 4)
-    with mp.get_context("fork").Pool(workers, initializer=_init_worker, initargs=(xml, assets)) as pool:
-        return np.concatenate(pool.map(_worker_chunk, chunks))
+    def __init__(self, xml: str, assets: dict[str, bytes], workers: int | None = None):
+        import multiprocessing as mp
+
+        self.workers = workers or os.cpu_count() or 1
+        self._pool = mp.get_context("fork").Pool(self.workers, initializer=_init_worker, initargs=(xml, assets))
+
+    def start(self, qpos: np.ndarray) -> None:
+        """Runs one state per worker so that every process has built its model."""
+        self._pool.map(_worker_chunk, [qpos[:1]] * self.workers, chunksize=1)
+
+    def map(self, qpos: np.ndarray) -> np.ndarray:
+        return np.concatenate(self._pool.map(_worker_chunk, np.array_split(qpos, self.workers * 4)))
+
+    def __enter__(self) -> "PairDistancePool":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._pool.terminate()
+
+
+def pair_depths_rollout(xml: str, assets: dict[str, bytes], qpos: np.ndarray, threads: int | None = None) -> np.ndarray:
+    """[S, nbody, nbody] signed distance of every colliding body pair where it is < 0 (+inf else).
+
+    C MuJoCo's fastest path for the penetration check: ``mujoco.rollout`` runs its threads without
+    the GIL, and a signed-distance sensor per body pair (cutoff 0, contacts off) reads each pair's
+    penetration in the same step (sensors are computed from the state before it is integrated).
+    Pairs are those ``mj_collision`` considers: different rigid bodies, both with colliding geoms,
+    not excluded.
+    """
+    threads = threads or os.cpu_count() or 1
+    spec = mujoco.MjSpec.from_string(xml, assets)
+    model = spec.compile()
+    pairs = _colliding_body_pairs(model)
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+    for a, b in pairs:
+        sensor = spec.add_sensor()
+        sensor.type = mujoco.mjtSensor.mjSENS_GEOMDIST
+        sensor.objtype = sensor.reftype = mujoco.mjtObj.mjOBJ_BODY
+        sensor.objname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, a)
+        sensor.refname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)
+        sensor.cutoff = 0.0
+    sensed = spec.compile()
+    state_spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    rest = np.zeros(mujoco.mj_stateSize(sensed, state_spec))
+    mujoco.mj_getState(sensed, mujoco.MjData(sensed), rest, state_spec)
+    init = np.repeat(rest[None], len(qpos), axis=0)
+    init[:, 1:1 + sensed.nq] = qpos  # the full-physics state is [time, qpos, qvel, ...]
+    datas = [mujoco.MjData(sensed) for _ in range(threads)]
+    with rollout.Rollout(nthread=threads) as r:
+        _, sensor_data = r.rollout(sensed, datas, init, nstep=1)
+    out = np.full((len(qpos), model.nbody, model.nbody), np.inf)
+    depth = sensor_data[:, 0, :]
+    for k, (a, b) in enumerate(pairs):
+        out[:, a, b] = out[:, b, a] = np.where(depth[:, k] < 0, depth[:, k], np.inf)
+    return out
+
+
+def _colliding_body_pairs(model: mujoco.MjModel) -> list[tuple[int, int]]:
+    collides = (model.geom_contype | model.geom_conaffinity) > 0
+    has = np.zeros(model.nbody, dtype=bool)
+    np.logical_or.at(has, model.geom_bodyid[collides], True)
+    excluded = set(int(s) for s in model.exclude_signature)
+    return [(a, b) for a in range(1, model.nbody) for b in range(a + 1, model.nbody)
+            if has[a] and has[b] and model.body_weldid[a] != model.body_weldid[b] and (a << 16) + b not in excluded]
