@@ -14,6 +14,7 @@ import trimesh
 
 from eval.physics import cpu_backend
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
+from eval.physics.states import StateBatch
 from eval.physics.tolerances import (GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT, GRAVITY_TILT_RAD, LIMIT_TOL_HINGE_RAD,
                                      LIMIT_TOL_SLIDE_NU)
 from jax3dc.structure.schema import Structure
@@ -82,13 +83,38 @@ def _tilt(quat: np.ndarray) -> float:
     return float(np.arccos(np.clip(zz, -1.0, 1.0)))
 
 
-def tolerated_pairs(sim: SimModel, distances: np.ndarray, depth_m: float) -> frozenset[tuple[int, int]]:
+def tolerated_pairs(sim: SimModel, distances: np.ndarray, depth_m: float, states: StateBatch | None = None,
+                    recontact_m: float = 0.0) -> frozenset[tuple[int, int]]:
     """Part pairs that never interpenetrate deeper than ``depth_m`` over the kinematic states, or
     already do at rest: left out of the reachability model, so that a servo is stopped only by a
-    collision that the kinematic checks also report (or by gravity and its own limits)."""
+    collision that the kinematic checks also report (or by gravity and its own limits).
+
+    With ``states``, a pair that a joint's sweep first parts (or leaves grazing) and then, farther from rest, drives
+    into each other deeper than ``recontact_m`` is kept too (RECONTACT_DEPTH_NU): a door opened
+    past lying flat folds back round its carcass's corner, a contact a real stop would meet."""
     body_part = {b: p for p, b in sim.part_body.items()}
     deep_later = (distances[1:] < -depth_m).any(axis=0) if len(distances) > 1 else np.zeros_like(distances[0], bool)
     blocking = deep_later & ~(distances[0] < -depth_m)
+    if states is not None:
+        blocking = blocking | _recontacts(sim, distances, states, recontact_m)
     ids = sorted(body_part)
     return frozenset((min(body_part[a], body_part[b]), max(body_part[a], body_part[b]))
                      for i, a in enumerate(ids) for b in ids[i + 1:] if not blocking[a, b])
+
+
+def _recontacts(sim: SimModel, distances: np.ndarray, states: StateBatch, depth_m: float) -> np.ndarray:
+    """[nbody, nbody] bool: some joint's sweep, followed from rest towards either limit, has the
+    pair apart or grazing (shallower than ``depth_m``) and later penetrating deeper than that."""
+    out = np.zeros(distances.shape[1:], dtype=bool)
+    for k, adr in enumerate(sim.joint_qpos):
+        rest = sim.model.qpos0[adr]
+        rows = np.nonzero(states.joint == k)[0]
+        for side in (1.0, -1.0):
+            ahead = rows[(states.value[rows] - rest) * side > 0]
+            ahead = ahead[np.argsort(np.abs(states.value[ahead] - rest))]
+            apart = np.zeros_like(out)
+            for s in ahead:
+                deep = distances[s] < -depth_m
+                out |= apart & deep
+                apart |= ~deep
+    return out | out.T

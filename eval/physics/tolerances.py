@@ -14,6 +14,7 @@ DETACH_TOL_NU = 0.2  # a moving child farther than this from its parent (all geo
 LIFT_OFF_MAX_NU = 0.5  # a slide that parts a child from its parent (a lid lifted off) may open this gap (PartNet-Mobility pot lids: ~0.35)
 SLIDE_GUIDE_OVERLAP_NU = 0.05  # a slide child overlapping its parent this much along the axis at rest runs in a guide it must not leave
 GUIDE_ENCLOSE_TOL_NU = 0.02  # a guide's extent across the slide axis contains its child's to within this (drawer fronts overhang their carcass by ~0.01)
+RECONTACT_DEPTH_NU = 0.006  # a pair a sweep parts (or leaves grazing), then drives this deep into each other, meets a stop
 LIMIT_TOL_HINGE_RAD = 0.08  # a hinge limit counts as reached within this angle
 LIMIT_TOL_SLIDE_NU = 0.03  # a slide limit counts as reached within this distance
 GRAVITY_DRIFT_NU = 0.05  # the root may move this far (after settling on the floor) under gravity

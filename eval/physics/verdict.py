@@ -25,7 +25,7 @@ from eval.physics.floor import first_below_floor
 from eval.physics.guides import carried_out_of_guide, welded
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
-from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_CONTACT_TOL_NU,
+from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_CONTACT_TOL_NU, RECONTACT_DEPTH_NU,
                                      REST_PENETRATION_TOL_NU, LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
 from jax3dc.structure.schema import Structure
 
@@ -53,7 +53,7 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
         distances = mjx_pair_distances(bare.model, states.qpos)
     verdict = verdict_from(structure, parts, kinematic, states, distances, proximity)
     if dynamics:
-        exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale)
+        exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
         extra = reachability(structure, parts, scale, exclude, kinematic.pieces)
         problems, sag = gravity(structure, parts, scale, kinematic.pieces)
         verdict["checks"]["gravity"] = problems

@@ -1,0 +1,63 @@
+"""A servo stopped by a contact its own sweep makes anew (eval.physics.dynamics.tolerated_pairs)."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+
+from data_pipeline.factories import generate_object
+from eval.physics.dynamics import tolerated_pairs
+from eval.physics.sim_model import SimOptions, build_sim_model
+from eval.physics.states import check_states
+from eval.physics import cpu_backend
+from eval.physics.tolerances import DETACH_TOL_NU, PENETRATION_TOL_NU, RECONTACT_DEPTH_NU
+from eval.physics.verdict import check_object
+
+warnings.filterwarnings("ignore", category=RuntimeWarning)
+
+
+@pytest.fixture(scope="module")
+def cabinet():
+    return generate_object("cabinet", 0)
+
+
+def _door(obj) -> int:
+    return next(p for p, n in obj.structure.nodes.items() if n.joint is not None and n.joint.type == "hinge")
+
+
+def _with_hi(structure, part, hi):
+    nodes = dict(structure.nodes)
+    joint = dataclasses.replace(nodes[part].joint, range=(nodes[part].joint.range[0], hi))
+    nodes[part] = dataclasses.replace(nodes[part], joint=joint)
+    return dataclasses.replace(structure, nodes=nodes)
+
+
+def _kept(structure, parts, scale) -> frozenset:
+    sim = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale))
+    states = check_states(sim)
+    distances = cpu_backend.pair_distances(sim.model, states.qpos)
+    tolerated = tolerated_pairs(sim, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
+    ids = sorted(structure.nodes)
+    return frozenset((a, b) for i, a in enumerate(ids) for b in ids[i + 1:]) - tolerated
+
+
+def test_door_opened_round_its_carcass_corner_cannot_reach_its_limit(cabinet):
+    door = _door(cabinet)
+    carcass = cabinet.structure.nodes[door].parent
+    # 225 degrees: past lying flat beside the carcass the door folds back round its side wall,
+    # never deeper than its own thickness (below the sweep's penetration tolerance)
+    structure = _with_hi(cabinet.structure, door, 1.25 * np.pi)
+    assert (min(door, carcass), max(door, carcass)) in _kept(structure, cabinet.parts, cabinet.scale_m_per_nu)
+    reasons = check_object(structure, cabinet.parts, cabinet.scale_m_per_nu)["joints"][str(door)]["reasons"]
+    assert any(r.startswith("limit unreachable: hi") for r in reasons), reasons
+    assert not any(r.startswith("penetrates") for r in reasons), reasons  # only the stop finds it
+
+
+def test_door_opened_short_of_its_carcass_reaches_its_limit(cabinet):
+    door = _door(cabinet)
+    structure = _with_hi(cabinet.structure, door, 0.5 * np.pi)
+    reasons = check_object(structure, cabinet.parts, cabinet.scale_m_per_nu)["joints"][str(door)]["reasons"]
+    assert reasons == []
