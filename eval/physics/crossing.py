@@ -7,7 +7,9 @@ the object thick. Here a moved part *passes through* a board (a thin connected c
 part, in its own oriented box, at most ``BOARD_MAX_THICKNESS_NU`` thick) when, along the joint's path
 from rest, one of its points goes from more than ``CROSSING_MARGIN_NU`` beyond one face to more than
 that beyond the other, meeting the board's plane over its material (a cell of its face the board
-covers, a cell in from its edges: not a ring's hole, nor round a rim's edge). Parts lying across
+covers, a cell in from its edges: not a ring's hole, nor round a rim's edge). A board may also be
+a thin convex collision piece of a part modelled as one closed mesh (a bucket's wall), and the
+moving part may be the board (a door leaf swung through a handle that stays). Parts lying across
 a board's plane at rest (a sash in its frame, a shaft through its panel) are left alone. Pure numpy on the
 rest-frame meshes; joint values as in the sweep (rad / nu), every other joint at rest.
 """
@@ -52,29 +54,42 @@ class Board:
         return grid
 
 
-def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh],
-              sweeps: dict[int, np.ndarray]) -> dict[int, tuple[int, float]]:
+def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: dict[int, np.ndarray],
+              pieces: dict[int, list[np.ndarray]] | None = None) -> dict[int, tuple[int, float]]:
     """Per jointed part: (other part, joint value) of the first value of its sweep (in the given
-    order) by which the subtree its joint moves has passed through a board of another part
-    (absent: never). The path from rest to each value is followed in steps of at most
-    CROSSING_STEP_NU of point travel, so a part that goes round a board's edge is not crossing it."""
-    boards = {p: _boards(mesh) for p, mesh in parts.items()}
+    order) by which the subtree its joint moves has passed through a board of another part, or a
+    board of the subtree through another part (absent: never). The path from rest to each value is followed in steps of at most
+    CROSSING_STEP_NU of point travel, so a part that goes round a board's edge is not crossing it.
+
+    ``pieces``: per part, the vertices (object frame, nu) of its convex collision pieces; the thin
+    ones are boards too (the walls of a bucket or carcass modelled as one closed mesh)."""
+    boards = {p: _boards(mesh) + _piece_boards((pieces or {}).get(p, [])) for p, mesh in parts.items()}
+    surfaces = {p: _surface(mesh) for p, mesh in parts.items()}
     out = {}
     for part, values in sweeps.items():
         joint = structure.nodes[part].joint
         moved = _subtree(structure, part)
-        points = np.concatenate([_surface(parts[p]) for p in sorted(moved)])
-        candidates = [(p, b) for p in sorted(structure.nodes) if p not in moved for b in boards[p]]
-        if not candidates:
+        points = np.concatenate([surfaces[p] for p in sorted(moved)])
+        still = [p for p in sorted(structure.nodes) if p not in moved]
+        candidates = [(p, b) for p in still for b in boards[p]]
+        # ... and a moving board through a part that stays (a door swung through a handle left on
+        # the frame): in the board's own frame that part's points move back along the path
+        carried = [(q, b) for q in sorted(moved) for b in boards[q]]
+        if not candidates and not carried:
             continue
-        reach = float(np.max(np.linalg.norm(points - np.asarray(joint.pivot), axis=1))) if joint.type == "hinge" else 1.0
+        everything = np.concatenate([points] + [surfaces[p] for p in still]) if carried else points
+        reach = float(np.max(np.linalg.norm(everything - np.asarray(joint.pivot), axis=1))) if joint.type == "hinge" else 1.0
         first: dict[float, int] = {}  # the value at which each direction's path first crosses -> part
         for end in (max(float(np.max(values)), 0.0), min(float(np.min(values)), 0.0)):
             steps = int(np.ceil(abs(end) * reach / CROSSING_STEP_NU))
             tracks = [(p, _Track(b, points)) for p, b in candidates if not _straddles(points, b)]
+            backwards = [(p, _Track(b, surfaces[p])) for p in still for _, b in carried if not _straddles(surfaces[p], b)]
             for v in np.linspace(0.0, end, steps + 1)[1:]:
                 posed = joint_motion(joint, float(v), points)
                 hit = next((p for p, track in tracks if track.passes_through(posed)), None)
+                if hit is None and backwards:
+                    back = {p: joint_motion(joint, -float(v), surfaces[p]) for p in {p for p, _ in backwards}}
+                    hit = next((p for p, track in backwards if track.passes_through(back[p])), None)
                 if hit is not None:
                     first[float(v)] = hit
                     break
@@ -154,19 +169,10 @@ def _boards(mesh: trimesh.Trimesh) -> list[Board]:
     out = []
     for c in components:
         v = np.asarray(c.vertices, dtype=np.float64)
-        if len(v) < 4:
+        frame = _thin_frame(v)
+        if frame is None:
             continue
-        try:
-            transform, extents = trimesh.bounds.oriented_bounds(v)
-        except Exception:  # qhull: a flat or degenerate component
-            continue
-        order = np.argsort(extents)
-        half = extents[order] / 2
-        if half[1] * 2 < MIN_BOARD_NU or half[0] * 2 > BOARD_MAX_THICKNESS_NU:
-            continue
-        to_local = transform[:3, :3]  # rows: the box axes in the mesh frame
-        centre = -to_local.T @ transform[:3, 3]
-        axes = to_local[order]
+        centre, axes, half = frame
         shape = np.maximum(1, np.ceil(2 * half[1:] / CROSSING_CELL_NU).astype(int))
         empty = Board(centre, axes, half, np.zeros(shape, dtype=bool))
         material = np.concatenate([v, np.asarray(c.sample(2000, seed=0), dtype=np.float64)]) if len(c.faces) else v
@@ -174,3 +180,34 @@ def _boards(mesh: trimesh.Trimesh) -> list[Board]:
         covered = binary_erosion(empty.cells_of(((material - centre) @ axes.T)[:, 1:]), np.ones((3, 3)), border_value=0)
         out.append(Board(centre, axes, half, covered))
     return out
+
+
+def _piece_boards(pieces: list[np.ndarray]) -> list[Board]:
+    """The thin convex collision pieces of a part as boards: convex, each covers its whole face."""
+    out = []
+    for v in pieces:
+        frame = _thin_frame(np.asarray(v, dtype=np.float64))
+        if frame is None:
+            continue
+        centre, axes, half = frame
+        shape = np.maximum(1, np.ceil(2 * half[1:] / CROSSING_CELL_NU).astype(int))
+        covered = binary_erosion(np.ones(shape, dtype=bool), np.ones((3, 3)), border_value=0)
+        out.append(Board(centre, axes, half, covered))
+    return out
+
+
+def _thin_frame(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(centre, axes (rows, thin axis first), half extents) of the points' oriented box when it is
+    a board (see BOARD_MAX_THICKNESS_NU, MIN_BOARD_NU); None otherwise."""
+    if len(v) < 4:
+        return None
+    try:
+        transform, extents = trimesh.bounds.oriented_bounds(v)
+    except Exception:  # qhull: a flat or degenerate component
+        return None
+    order = np.argsort(extents)
+    half = extents[order] / 2
+    if half[1] * 2 < MIN_BOARD_NU or half[0] * 2 > BOARD_MAX_THICKNESS_NU:
+        return None
+    to_local = transform[:3, :3]  # rows: the box axes in the mesh frame
+    return -to_local.T @ transform[:3, 3], to_local[order], half

@@ -2,7 +2,8 @@
 
 Reasons are short stable strings: "penetrates parent at rest", "penetrates part P at q=V",
 "penetrates part P (passes through it) at q=V" (a thin board driven through another, see ``crossing``),
-"penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part, or carries it into P),
+"penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part, or carries it into P;
+"penetrates part P (passes through it) while joint J moves (q=V)" when the two pass through each other),
 "penetrates the floor at q=V" (below the rest pose's lowest point, where the gravity test's floor is),
 "detached from parent at q=V", "detached from parent at rest (gap G nu)" (a joint needs its two bodies
 to meet: REST_CONTACT_TOL_NU), "detached from its guide (part G, ...)" (a slide child carried out of the
@@ -27,6 +28,7 @@ from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
 from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_CONTACT_TOL_NU, RECONTACT_DEPTH_NU,
                                      REST_PENETRATION_TOL_NU, LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
+from jax3dc.export.assembly import frames_nu, tree_order
 from jax3dc.structure.schema import Structure
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
@@ -102,7 +104,7 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
     for k, part in enumerate(sim.joint_parts):
         rows = _nearest_rest_first(np.nonzero(states.joint == k)[0], states.value, sim.model.qpos0[sim.joint_qpos[k]])
         sweeps[part] = states.value[rows] / (1.0 if sim.joint_type[k] == "hinge" else scale)
-    crossed = crossings(structure, parts, sweeps)  # thin boards driven through each other: too shallow for the depth test
+    crossed = crossings(structure, parts, sweeps, _pieces_nu(structure, sim))  # thin boards driven through each other: too shallow for the depth test
     for k, part in enumerate(sim.joint_parts):
         unit = 1.0 if sim.joint_type[k] == "hinge" else scale
         moved = sim.moved_by[k]
@@ -122,6 +124,12 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
         if hit is None and part in crossed:
             other, value = crossed[part]
             hit = f"penetrates part {other} (passes through it) at q={value:.3f}"
+        if part in crossed:  # ... and a jointed part it passes through (or that passes through it) while staying put
+            other, value = crossed[part]
+            k2 = joint_of_group.get(int(group[sim.part_body[other]]))
+            hurt = None if k2 is None or sim.moved_by[k2][child] else sim.joint_parts[k2]
+            if hurt is not None and not any(r.startswith("penetrates part") for r in reasons[hurt]):
+                reasons[hurt].append(f"penetrates part {part} (passes through it) while joint {part} moves (q={value:.3f})")
         if hit:
             reasons[part].append(hit)
         below = first_below_floor(structure, parts, part, states.value[rows] / unit)
@@ -246,3 +254,10 @@ def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], par
     # the block fixed to that base, the same body in a simulator
     holder = min(line_distance(parts[p]) for p in welded(structure, node.parent))
     return line_distance(parts[part]) <= ATTACH_TOL_NU and holder <= ATTACH_TOL_NU
+
+
+def _pieces_nu(structure: Structure, sim: SimModel) -> dict[int, list[np.ndarray]]:
+    """The collision pieces' vertices in the rest pose's object frame (nu); the model holds them in
+    each part's frame, in metres."""
+    frames = frames_nu(structure, tree_order(structure))
+    return {p: [v / sim.scale + frames[p] for v in pieces] for p, pieces in sim.pieces.items()}

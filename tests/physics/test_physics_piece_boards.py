@@ -1,0 +1,56 @@
+"""Crossings (eval.physics.crossing): thin convex collision pieces of a one-mesh part are boards too,
+and a moving board passing through a part that stays is caught (and blamed on that part's joint)."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+
+from data_pipeline.factories import generate_object
+from eval.physics.collision_shapes import convex_pieces
+from eval.physics.crossing import crossings
+from eval.physics.ground_truth import imported_objects
+from eval.physics.mutations import mutations_of
+from eval.physics.verdict import check_object
+from tests.shared_fixtures import partnet_object
+
+warnings.filterwarnings("ignore", category=RuntimeWarning)
+
+
+def test_bucket_handle_swung_the_wrong_way_passes_through_the_bucket_wall():
+    # the bucket is one closed mesh: its wall is no thin component, only its decomposition's pieces are
+    obj = next(imported_objects([partnet_object("bucket_swing_100435")]))
+    handle = next(p for p, n in obj.structure.nodes.items() if n.joint is not None)
+    bucket = obj.structure.nodes[handle].parent
+    pieces = {p: convex_pieces(m, 1e-3) for p, m in obj.parts.items()}
+    flipped = next(m for m in mutations_of(obj.structure, obj.parts) if m.kind == "flipped axis" and m.part == handle)
+    lo, hi = flipped.structure.nodes[handle].joint.range
+    sweep = {handle: np.linspace(lo, hi, 9)[np.argsort(np.abs(np.linspace(lo, hi, 9)), kind="stable")]}
+    assert handle not in crossings(flipped.structure, obj.parts, sweep)  # the wall is no board as a component
+    assert crossings(flipped.structure, obj.parts, sweep, pieces)[handle][0] == bucket
+    reasons = check_object(flipped.structure, obj.parts, obj.scale, dynamics=False)["joints"][str(handle)]["reasons"]
+    assert any(r.startswith(f"penetrates part {bucket} (passes through it)") for r in reasons), reasons
+    # the handle's own range swings it over the rim: clear of every wall piece
+    lo, hi = obj.structure.nodes[handle].joint.range
+    assert handle not in crossings(obj.structure, obj.parts, {handle: np.linspace(lo, hi, 9)}, pieces)
+
+
+def test_door_swung_through_a_handle_left_on_the_frame_blames_the_handle():
+    # the handle hinged on the frame instead of the leaf: the leaf (a thin board) swings through it,
+    # never deeper than its own thickness
+    door = generate_object("door", 0)
+    leaf = next(p for p, n in door.structure.nodes.items() if n.joint is not None and n.parent in door.structure.roots())
+    handle = next(c for c in door.structure.children(leaf) if door.structure.nodes[c].joint is not None)
+    nodes = dict(door.structure.nodes)
+    nodes[handle] = dataclasses.replace(nodes[handle], parent=door.structure.roots()[0])
+    moved = dataclasses.replace(door.structure, nodes=nodes)
+    lo, hi = moved.nodes[leaf].joint.range
+    assert crossings(moved, door.parts, {leaf: np.linspace(lo, hi, 9)})[leaf][0] == handle
+    assert leaf not in crossings(door.structure, door.parts, {leaf: np.linspace(lo, hi, 9)})
+    reasons = check_object(moved, door.parts, door.scale_m_per_nu, dynamics=False)["joints"]
+    assert any(r.startswith(f"penetrates part {leaf} (passes through it) while joint {leaf}")
+               for r in reasons[str(handle)]["reasons"]), reasons
+    assert all(j["ok"] for j in check_object(door.structure, door.parts, door.scale_m_per_nu,
+                                             dynamics=False)["joints"].values())
