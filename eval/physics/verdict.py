@@ -154,11 +154,13 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
                                             f"while joint {part} moves (q={states.value[s] / unit:.3f})")
         parent_group = group == group[parent]
         overlap = None  # slides: the child's overlap with its parent along the axis, per sweep value (nu)
+        guided = False  # ... and whether it runs in a guide there
         if sim.joint_type[k] == "slide":
-            overlap = _overlap_along_axis(structure, parts, part, [body_part[b] for b in np.nonzero(moved)[0]],
-                                          [body_part[b] for b in np.nonzero(parent_group)[0]])
+            overlap, guide_overlap = _overlap_along_axis(structure, parts, part, [body_part[b] for b in np.nonzero(moved)[0]],
+                                                         [body_part[b] for b in np.nonzero(parent_group)[0]])
+            guided = overlap(0.0) >= guide_overlap
         values_nu = states.value[rows] / unit
-        if overlap is not None and _lifts_off(overlap, values_nu):  # a lid: parting from its parent is the motion
+        if overlap is not None and not guided and _lifts_off(overlap, values_nu):  # a lid: parting from its parent is the motion
             gone = [v for v in values_nu if -overlap(v) > LIFT_OFF_MAX_NU]
             if gone:
                 reasons[part].append(f"detached from parent (lifted off too far) at q={gone[0]:.3f}")
@@ -168,7 +170,7 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
                 if not np.any(near < DETACH_TOL_NU * scale):
                     reasons[part].append(f"detached from parent at q={states.value[s] / unit:.3f}")
                     break
-        if overlap is not None and overlap(0.0) >= SLIDE_GUIDE_OVERLAP_NU and not any(r.startswith("detached") for r in reasons[part]):
+        if guided and not any(r.startswith("detached") for r in reasons[part]):
             out = [v for v in values_nu if overlap(v) <= 0.0]  # a drawer or rack in its guide must stay in it
             if out:
                 reasons[part].append(f"detached from parent (slides out of its guide) at q={out[0]:.3f}")
@@ -211,9 +213,11 @@ def _nearest_rest_first(rows: np.ndarray, values: np.ndarray, rest: float) -> np
 
 def _overlap_along_axis(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int, moved: list[int],
                         holders: list[int]):
-    """v (nu) -> how far the moved parts' extent along the slide axis overlaps the parent group's
-    once slid by v (negative: the gap between them). A drawer in its carcass overlaps by most of
-    its depth (it runs in a guide, SLIDE_GUIDE_OVERLAP_NU); a lid sitting on its pot by about 0."""
+    """(v (nu) -> how far the moved parts' extent along the slide axis overlaps the parent group's
+    once slid by v (negative: the gap between them), the rest overlap from which the child runs in a
+    guide). A drawer in its carcass overlaps by most of its depth (SLIDE_GUIDE_OVERLAP_NU), a
+    toaster's lever in its slot by all of its own length (shorter than that): both run in a guide;
+    a lid sitting on its pot overlaps by about 0."""
     axis = np.asarray(structure.nodes[part].joint.axis, dtype=np.float64)
     axis /= np.linalg.norm(axis)
 
@@ -222,7 +226,7 @@ def _overlap_along_axis(structure: Structure, parts: dict[int, trimesh.Trimesh],
         return float(t.min()), float(t.max())
 
     (clo, chi), (plo, phi) = extent(moved), extent(holders)
-    return lambda v: min(chi + v, phi) - max(clo + v, plo)
+    return (lambda v: min(chi + v, phi) - max(clo + v, plo)), min(SLIDE_GUIDE_OVERLAP_NU, chi - clo - 1e-6)
 
 
 def _lifts_off(overlap, values_nu: np.ndarray) -> bool:
@@ -230,7 +234,7 @@ def _lifts_off(overlap, values_nu: np.ndarray) -> bool:
     a pot; a part slid off to either side is not a lid)."""
     rest = overlap(0.0)
     one_way = bool(np.all(values_nu >= -1e-9) or np.all(values_nu <= 1e-9))
-    return one_way and rest < SLIDE_GUIDE_OVERLAP_NU and all(overlap(v) <= rest + 1e-9 for v in values_nu)
+    return one_way and all(overlap(v) <= rest + 1e-9 for v in values_nu)
 
 
 def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], part: int) -> bool:

@@ -10,6 +10,7 @@ import pytest
 
 from data_pipeline.factories import generate_object
 from eval.physics.guides import carried_out_of_guide
+from eval.physics.tolerances import SLIDE_GUIDE_OVERLAP_NU
 from eval.physics.verdict import check_object
 
 warnings.filterwarnings("ignore", category=RuntimeWarning)
@@ -61,3 +62,20 @@ def test_a_part_held_by_what_it_runs_in_is_not_flagged(chest):
         parts[p] = parts[p].copy().apply_transform(shrink)
     structure = _reparented(chest.structure, upper, low)
     assert carried_out_of_guide(structure, parts, upper) is None
+
+
+def test_lever_shorter_than_the_guide_overlap_runs_in_its_slot():
+    # a toaster's lever lies alongside the body over all of its own length (less than
+    # SLIDE_GUIDE_OVERLAP_NU): slid the wrong way it leaves the top of the body, not a lid lifted off
+    toaster = generate_object("toaster", 0)
+    lever = next(p for p, n in toaster.structure.nodes.items() if n.joint is not None and n.joint.type == "slide")
+    joint = toaster.structure.nodes[lever].joint
+    t = np.asarray(toaster.parts[lever].vertices) @ np.asarray(joint.axis, dtype=np.float64)
+    assert t.max() - t.min() < SLIDE_GUIDE_OVERLAP_NU  # the case the full-length rule is for
+    nodes = dict(toaster.structure.nodes)
+    nodes[lever] = dataclasses.replace(nodes[lever], joint=dataclasses.replace(joint, axis=tuple(-np.asarray(joint.axis))))
+    flipped = dataclasses.replace(toaster.structure, nodes=nodes)
+    reasons = check_object(flipped, toaster.parts, toaster.scale_m_per_nu, dynamics=False)["joints"][str(lever)]["reasons"]
+    assert any(r.startswith("detached from parent (slides out of its guide)") for r in reasons), reasons
+    assert check_object(toaster.structure, toaster.parts, toaster.scale_m_per_nu,
+                        dynamics=False)["joints"][str(lever)]["reasons"] == []
