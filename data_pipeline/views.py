@@ -26,12 +26,7 @@ class PosedObject:
 
 
 def subtree(structure: Structure, root: int) -> list[int]:
-    out, stack = [], [root]
-    while stack:
-        pid = stack.pop()
-        out.append(pid)
-        stack.extend(structure.children(pid))
-    return sorted(out)
+    return sorted(structure.subtree(root))
 
 
 def joint_transform(joint: Joint, theta: float) -> np.ndarray:

@@ -68,7 +68,7 @@ def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: d
     out = {}
     for part, values in sweeps.items():
         joint = structure.nodes[part].joint
-        moved = _subtree(structure, part)
+        moved = structure.subtree(part)
         points = np.concatenate([surfaces[p] for p in sorted(moved)])
         still = [p for p in sorted(structure.nodes) if p not in moved]
         candidates = [(p, b) for p in still for b in boards[p]]
@@ -142,15 +142,6 @@ class _Track:
         self.side = np.where(seen, side, self.side)
         self.seen = np.where(seen[:, None], local, self.seen)
         return crossed
-
-
-def _subtree(structure: Structure, part: int) -> set[int]:
-    out, stack = {part}, [part]
-    while stack:
-        for c in structure.children(stack.pop()):
-            out.add(c)
-            stack.append(c)
-    return out
 
 
 def _surface(mesh: trimesh.Trimesh) -> np.ndarray:

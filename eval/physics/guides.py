@@ -38,7 +38,7 @@ def carried_out_of_guide(structure: Structure, parts: dict[int, trimesh.Trimesh]
         return None  # its parent is its guide: the sweep check keeps it there
     chain = _chain(structure, part)  # jointed parts from the child up to its root
     for guide in sorted(structure.nodes):
-        if guide in _subtree(structure, part) or guide in welded(structure, node.parent):
+        if guide in structure.subtree(part) or guide in welded(structure, node.parent):
             continue
         if not _encloses(np.asarray(parts[guide].vertices, dtype=np.float64), child, basis):
             continue
@@ -89,15 +89,6 @@ def _chain(structure: Structure, part: int) -> list[int]:
         if structure.nodes[p].joint is not None:
             out.append(p)
         p = structure.nodes[p].parent
-    return out
-
-
-def _subtree(structure: Structure, part: int) -> set[int]:
-    out, stack = {part}, [part]
-    while stack:
-        for c in structure.children(stack.pop()):
-            out.add(c)
-            stack.append(c)
     return out
 
 

@@ -78,18 +78,8 @@ def _away_from(centroid: np.ndarray, pivot: np.ndarray, axis: np.ndarray) -> np.
     return d / np.linalg.norm(d)
 
 
-def _descendants(structure: Structure, part: int) -> set[int]:
-    out, stack = {part}, [part]
-    while stack:
-        p = stack.pop()
-        for c in structure.children(p):
-            out.add(c)
-            stack.append(c)
-    return out
-
-
 def _farthest_other_part(structure: Structure, part: int, centroids) -> int | None:
-    candidates = [p for p in structure.nodes if p not in _descendants(structure, part) and p != structure.nodes[part].parent]
+    candidates = [p for p in structure.nodes if p not in structure.subtree(part) and p != structure.nodes[part].parent]
     if not candidates:
         return None
     return max(candidates, key=lambda p: float(np.linalg.norm(centroids[p] - centroids[part])))
@@ -97,7 +87,7 @@ def _farthest_other_part(structure: Structure, part: int, centroids) -> int | No
 
 def _other_non_descendant(structure: Structure, part: int, parent: int | None, centroids) -> int | None:
     """The nearest part (by centroid) that is neither the parent nor in the part's own subtree."""
-    candidates = [p for p in structure.nodes if p not in _descendants(structure, part) and p != parent]
+    candidates = [p for p in structure.nodes if p not in structure.subtree(part) and p != parent]
     if not candidates:
         return None
     return min(candidates, key=lambda p: float(np.linalg.norm(centroids[p] - centroids[part])))

@@ -79,6 +79,15 @@ class Structure:
     def children(self, part_id: int) -> list[int]:
         return sorted(i for i, n in self.nodes.items() if n.parent == part_id)
 
+    def subtree(self, part_id: int) -> set[int]:
+        """The part and all its descendants: what moves when its joint moves."""
+        out, stack = {part_id}, [part_id]
+        while stack:
+            for child in self.children(stack.pop()):
+                out.add(child)
+                stack.append(child)
+        return out
+
     def joints(self) -> dict[int, Joint]:
         """Child part id -> its joint, for every articulated node."""
         return {i: n.joint for i, n in sorted(self.nodes.items()) if n.joint is not None}
