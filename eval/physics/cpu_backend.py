@@ -3,7 +3,7 @@
 Kinematic checks need only ``mj_kinematics`` + ``mj_collision`` per state (one MjData per thread
 or worker process); dynamic checks use ``mujoco.rollout`` (threaded C rollouts). For the
 penetration check alone, rollout with distance sensors is the path without the GIL
-(``pair_depths_rollout``; ``bench/physics.py`` times it against the processes).
+(``RolloutDepths``; ``bench/physics.py`` times it against the processes).
 """
 
 from __future__ import annotations
@@ -99,41 +99,45 @@ class PairDistancePool:
         self._pool.terminate()
 
 
-def pair_depths_rollout(xml: str, assets: dict[str, bytes], qpos: np.ndarray, threads: int | None = None) -> np.ndarray:
-    """[S, nbody, nbody] signed distance of every colliding body pair where it is < 0 (+inf else).
+class RolloutDepths:
+    """Signed distance of every colliding body pair where it is < 0, by C MuJoCo's fastest path for
+    the penetration check: ``mujoco.rollout`` runs its threads without the GIL, and a
+    signed-distance sensor per body pair (cutoff 0, contacts off) reads each pair's penetration in
+    one step (sensors are computed from the state before it is integrated). Pairs are those
+    ``mj_collision`` considers: different rigid bodies, both with colliding geoms, not excluded.
+    The sensor model is compiled once, apart from the calls."""
 
-    C MuJoCo's fastest path for the penetration check: ``mujoco.rollout`` runs its threads without
-    the GIL, and a signed-distance sensor per body pair (cutoff 0, contacts off) reads each pair's
-    penetration in the same step (sensors are computed from the state before it is integrated).
-    Pairs are those ``mj_collision`` considers: different rigid bodies, both with colliding geoms,
-    not excluded.
-    """
-    threads = threads or os.cpu_count() or 1
-    spec = mujoco.MjSpec.from_string(xml, assets)
-    model = spec.compile()
-    pairs = _colliding_body_pairs(model)
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    for a, b in pairs:
-        sensor = spec.add_sensor()
-        sensor.type = mujoco.mjtSensor.mjSENS_GEOMDIST
-        sensor.objtype = sensor.reftype = mujoco.mjtObj.mjOBJ_BODY
-        sensor.objname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, a)
-        sensor.refname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)
-        sensor.cutoff = 0.0
-    sensed = spec.compile()
-    state_spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    rest = np.zeros(mujoco.mj_stateSize(sensed, state_spec))
-    mujoco.mj_getState(sensed, mujoco.MjData(sensed), rest, state_spec)
-    init = np.repeat(rest[None], len(qpos), axis=0)
-    init[:, 1:1 + sensed.nq] = qpos  # the full-physics state is [time, qpos, qvel, ...]
-    datas = [mujoco.MjData(sensed) for _ in range(threads)]
-    with rollout.Rollout(nthread=threads) as r:
-        _, sensor_data = r.rollout(sensed, datas, init, nstep=1)
-    out = np.full((len(qpos), model.nbody, model.nbody), np.inf)
-    depth = sensor_data[:, 0, :]
-    for k, (a, b) in enumerate(pairs):
-        out[:, a, b] = out[:, b, a] = np.where(depth[:, k] < 0, depth[:, k], np.inf)
-    return out
+    def __init__(self, xml: str, assets: dict[str, bytes]):
+        spec = mujoco.MjSpec.from_string(xml, assets)
+        model = spec.compile()
+        self.nbody = model.nbody
+        self.pairs = _colliding_body_pairs(model)
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+        for a, b in self.pairs:
+            sensor = spec.add_sensor()
+            sensor.type = mujoco.mjtSensor.mjSENS_GEOMDIST
+            sensor.objtype = sensor.reftype = mujoco.mjtObj.mjOBJ_BODY
+            sensor.objname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, a)
+            sensor.refname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b)
+            sensor.cutoff = 0.0
+        self.model = spec.compile()
+        state_spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+        self._rest = np.zeros(mujoco.mj_stateSize(self.model, state_spec))
+        mujoco.mj_getState(self.model, mujoco.MjData(self.model), self._rest, state_spec)
+
+    def __call__(self, qpos: np.ndarray, threads: int | None = None) -> np.ndarray:
+        """[S, nbody, nbody] penetration distance (metres, < 0) per body pair; +inf where none."""
+        threads = threads or os.cpu_count() or 1
+        init = np.repeat(self._rest[None], len(qpos), axis=0)
+        init[:, 1:1 + self.model.nq] = qpos  # the full-physics state is [time, qpos, qvel, ...]
+        datas = [mujoco.MjData(self.model) for _ in range(threads)]
+        with rollout.Rollout(nthread=threads) as r:
+            _, sensor_data = r.rollout(self.model, datas, init, nstep=1)
+        out = np.full((len(qpos), self.nbody, self.nbody), np.inf)
+        depth = sensor_data[:, 0, :]
+        for k, (a, b) in enumerate(self.pairs):
+            out[:, a, b] = out[:, b, a] = np.where(depth[:, k] < 0, depth[:, k], np.inf)
+        return out
 
 
 def _colliding_body_pairs(model: mujoco.MjModel) -> list[tuple[int, int]]:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics.cpu_backend import PairDistancePool, pair_depths_rollout, pair_distances
+from eval.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
 from eval.physics.sim_model import SimOptions, build_sim_model
 from eval.physics.tolerances import PENETRATION_TOL_NU
 
@@ -38,7 +38,7 @@ def test_process_pool_gives_the_loops_distances(cabinet_states):
 def test_rollout_sensors_give_the_loops_penetrations(cabinet_states):
     sim, qpos, tol = cabinet_states
     loop = pair_distances(sim.model, qpos)
-    rollout = pair_depths_rollout(sim.xml, sim.assets, qpos, threads=2)
+    rollout = RolloutDepths(sim.xml, sim.assets)(qpos, threads=2)
     deep = loop < -tol
     assert deep.sum() > 100  # the states do penetrate, so agreement means something
     np.testing.assert_array_equal(rollout < -tol, deep)
