@@ -18,15 +18,15 @@ The hull data come from qhull (``_hull``), not from MJX's convex data, which mer
 coplanar facets and were millimetres off on sampled hulls. ``tests/physics/test_physics_mjx_broadphase.py``
 checks the depth against a brute-force separating-axis test, the batch against C MuJoCo, and the
 broad phase against keeping every pair. Mesh data are inputs of the compiled functions, not
-constants: objects whose models have the same shapes reuse them.
+constants: objects whose models have the same shapes share the narrow phase's compiled code.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass
-from typing import Callable
 
 import jax
 import jax.numpy as jnp
@@ -41,6 +41,7 @@ CHUNK_ITEMS = 16384  # narrow-phase items per vmapped chunk: bounds the memory o
 MIN_CAPACITY = 256  # smallest narrow-phase batch (smaller counts are padded up to it)
 COPLANAR_COS = 1.0 - 1e-9  # hull triangles whose normals agree this closely lie in one face
 SMALL_HULL_VERTICES = 8  # hulls of at most this many vertices (boxes, blocks) form their own size tier
+PAD_MULTIPLE = 8  # hull vertex, face and edge counts are padded up to a multiple of this
 
 
 @dataclass(frozen=True)
@@ -94,8 +95,10 @@ def _tiered_hulls(model: mujoco.MjModel) -> tuple[list[_Hulls], np.ndarray, np.n
         if not members:
             stacks.append(None)
             continue
-        sizes = [max(len(h[i]) for h in members) for i in range(5)]
-        stacked = [np.stack([_pad_to(h[i], sizes[i]) for h in members]) for i in range(5)]
+        # vertex, face and edge counts padded up to a multiple of PAD_MULTIPLE (the inner point is one
+        # vector): objects of one structure then share compiled code
+        sizes = [1 if i == 1 else PAD_MULTIPLE * math.ceil(max(len(h[i]) for h in members) / PAD_MULTIPLE) for i in range(5)]
+        stacked = [np.stack([h[i] if i == 1 else _pad_to(h[i], sizes[i]) for h in members]) for i in range(5)]
         stacks.append(_Hulls(*(x.astype(np.int32 if x.dtype.kind == "i" else np.float32) for x in stacked)))
     return stacks, tier, slot
 
@@ -166,15 +169,15 @@ def _candidate_pairs(model: mujoco.MjModel) -> np.ndarray:
     return np.asarray(pairs, dtype=np.int32).reshape(-1, 2)
 
 
-def _boxes_overlap(c1, r1, h1, c2, r2, h2) -> jax.Array:
+def _boxes_overlap(c1, r1, h1, c2, r2, h2, slack) -> jax.Array:
     """Separating-axis test of two oriented boxes (centre, rotation whose columns are the box axes,
-    half sizes): False only when some axis separates them by more than BOX_SLACK_M."""
+    half sizes): False only when some axis separates them by more than ``slack``."""
     a1, a2 = r1.T, r2.T  # rows: axes
     axes = jnp.concatenate([a1, a2, _cross(a1[:, None, :], a2[None, :, :]).reshape(9, 3)])  # [15, 3]; a zero axis never separates
     reach1 = (jnp.abs(_dot(axes[:, None, :], a1[None, :, :])) * h1).sum(axis=1)
     reach2 = (jnp.abs(_dot(axes[:, None, :], a2[None, :, :])) * h2).sum(axis=1)
     gap = jnp.abs(_dot(axes, c2 - c1)) - reach1 - reach2
-    return ~jnp.any(gap > BOX_SLACK_M * jnp.sqrt(_dot(axes, axes)))
+    return ~jnp.any(gap > slack * jnp.sqrt(_dot(axes, axes)))
 
 
 def capacity_for(count: int) -> int:
@@ -188,12 +191,70 @@ def capacity_for(count: int) -> int:
     return CHUNK_ITEMS * math.ceil(count / CHUNK_ITEMS)
 
 
+Classes = tuple[tuple[int, int, tuple[int, ...]], ...]  # (tier 1, tier 2, pair indices) per class of hull sizes
+
+
+@functools.partial(jax.jit, static_argnames=("classes",))
+def _poses_and_mask(mx: mjx.Model, consts: dict, qpos: jax.Array, classes: Classes):
+    """Geom poses [S, G, 3] / [S, G, 3, 3], the broad phase's verdict [S, P] and its count per class."""
+    def one(q):
+        with jax.default_matmul_precision("highest"):  # MJX's frame products: no TF32 on GPUs
+            dx = mjx.kinematics(mx, mjx.make_data(mx).replace(qpos=q))
+        box = consts["box"]
+        g1, g2 = consts["g1"], consts["g2"]
+        rot = dx.geom_xmat
+        centre = dx.geom_xpos + _dot(rot, box[:, None, :3])
+        keep = jax.vmap(_boxes_overlap, in_axes=(0, 0, 0, 0, 0, 0, None))(
+            centre[g1], rot[g1], box[g1, 3:], centre[g2], rot[g2], box[g2, 3:], consts["slack"])
+        return dx.geom_xpos, rot, keep
+
+    pos, rot, keep = jax.vmap(one)(qpos)
+    counts = jnp.stack([keep[:, np.asarray(members)].sum() for _, _, members in classes])
+    return pos, rot, keep, counts
+
+
+def _class_depths(consts, pos, rot, keep, count, tiers, members, capacity):
+    """Depth of the first ``count`` kept items of one class, computed in chunks of CHUNK_ITEMS."""
+    chunk = min(CHUNK_ITEMS, capacity)
+    members = np.asarray(members)
+    item = jnp.nonzero(keep[:, members].reshape(-1), size=capacity, fill_value=0)[0]
+    valid = jnp.arange(capacity) < count
+    s, p = item // len(members), jnp.asarray(members)[item % len(members)]
+    g1, g2 = consts["g1"][p], consts["g2"][p]
+    hulls1, hulls2 = (consts["hulls"][t] for t in tiers)
+
+    def collide(args):
+        def one(s, a, b):
+            hull_a = {k: v[consts["slot"][a]] for k, v in hulls1.items()}
+            hull_b = {k: v[consts["slot"][b]] for k, v in hulls2.items()}
+            return penetration_depth(pos[s, a], rot[s, a], hull_a, pos[s, b], rot[s, b], hull_b)
+
+        return jax.vmap(one)(*args)
+
+    shaped = [x.reshape(capacity // chunk, chunk) for x in (s, g1, g2)]
+    depth = jax.lax.map(collide, shaped).reshape(capacity)
+    dist = jnp.where(valid & (depth >= 0.0), -depth, jnp.inf)
+    return s, consts["b1"][p], consts["b2"][p], dist
+
+
+@functools.partial(jax.jit, static_argnames=("classes", "capacities", "nbody"))
+def _narrow_phase(consts, pos, rot, keep, counts, classes: Classes, capacities: tuple[int, ...], nbody: int):
+    out = jnp.full((pos.shape[0], nbody, nbody), jnp.inf, pos.dtype)
+    for k, ((t1, t2, members), capacity) in enumerate(zip(classes, capacities)):
+        if capacity:
+            s, b1, b2, dist = _class_depths(consts, pos, rot, keep, counts[k], (t1, t2), members, capacity)
+            out = out.at[s, b1, b2].min(dist).at[s, b2, b1].min(dist)
+    return out
+
+
 class PairDistances:
     """qpos [S, nq] -> [S, nbody, nbody] deepest contact distance per body pair (metres, ≤ 0; +inf: none).
 
-    Compiled once per model structure. Pairs fall in classes by the size tiers of their two hulls;
-    ``__call__`` counts the broad phase's survivors of each class on the host and runs each class's
-    narrow phase at the matching capacity (``capacity_for``)."""
+    Pairs fall in classes by the size tiers of their two hulls; ``__call__`` counts the broad
+    phase's survivors of each class on the host and runs each class's narrow phase at the matching
+    capacity (``capacity_for``). The narrow phase, the costly compile, is shared by every model with
+    the same pair classes, body count and padded hull sizes (mesh data are its inputs); the
+    kinematics compile per model, as MJX keeps a model's index and size arrays as static data."""
 
     def __init__(self, model: mujoco.MjModel):
         pairs = _candidate_pairs(model)
@@ -206,81 +267,31 @@ class PairDistances:
         swap = geom_tier[pairs[:, 0]] > geom_tier[pairs[:, 1]]  # the smaller hull first: classes (0,0), (0,1), (1,1)
         self.pairs = np.where(swap[:, None], pairs[:, ::-1], pairs)
         tiers = geom_tier[self.pairs]
-        self._classes = [(t1, t2, np.nonzero((tiers[:, 0] == t1) & (tiers[:, 1] == t2))[0])
-                         for t1, t2 in ((0, 0), (0, 1), (1, 1))]
-        self._classes = [c for c in self._classes if len(c[2])]
+        classes = [(t1, t2, tuple(int(i) for i in np.nonzero((tiers[:, 0] == t1) & (tiers[:, 1] == t2))[0]))
+                   for t1, t2 in ((0, 0), (0, 1), (1, 1))]
+        self.classes: Classes = tuple(c for c in classes if c[2])
         self._consts = {
             "g1": jnp.asarray(self.pairs[:, 0]), "g2": jnp.asarray(self.pairs[:, 1]),
             "b1": jnp.asarray(model.geom_bodyid[self.pairs[:, 0]]), "b2": jnp.asarray(model.geom_bodyid[self.pairs[:, 1]]),
             "slot": jnp.asarray(mesh_slot[model.geom_dataid] if len(mesh_slot) else np.zeros(model.ngeom, np.int32)),
-            "box": jnp.asarray(model.geom_aabb, dtype=jnp.float32),
+            "box": jnp.asarray(model.geom_aabb, dtype=jnp.float32), "slack": jnp.float32(BOX_SLACK_M),
             "hulls": [None if h is None else jax.tree_util.tree_map(jnp.asarray, vars(h)) for h in stacks],
         }
-        self._poses = jax.jit(self._poses_and_mask)
-        self._narrow: dict[tuple[int, ...], Callable] = {}
 
-    def _poses_and_mask(self, mx: mjx.Model, consts, qpos: jax.Array):
-        def one(q):
-            with jax.default_matmul_precision("highest"):  # MJX's frame products: no TF32 on GPUs
-                dx = mjx.kinematics(mx, mjx.make_data(mx).replace(qpos=q))
-            box = consts["box"]
-            g1, g2 = consts["g1"], consts["g2"]
-            rot = dx.geom_xmat
-            centre = dx.geom_xpos + _dot(rot, box[:, None, :3])
-            keep = jax.vmap(_boxes_overlap)(centre[g1], rot[g1], box[g1, 3:], centre[g2], rot[g2], box[g2, 3:])
-            return dx.geom_xpos, rot, keep
-
-        pos, rot, keep = jax.vmap(one)(qpos)
-        counts = jnp.stack([keep[:, members].sum() for _, _, members in self._classes])
-        return pos, rot, keep, counts
-
-    def _narrow_phase(self, capacities: tuple[int, ...]) -> Callable:
-        nbody = self.nbody
-
-        def one_class(consts, pos, rot, keep, count, tiers, members, capacity):
-            chunk = min(CHUNK_ITEMS, capacity)
-            item = jnp.nonzero(keep[:, members].reshape(-1), size=capacity, fill_value=0)[0]
-            valid = jnp.arange(capacity) < count
-            s, p = item // len(members), jnp.asarray(members)[item % len(members)]
-            g1, g2 = consts["g1"][p], consts["g2"][p]
-            hulls1, hulls2 = (consts["hulls"][t] for t in tiers)
-
-            def collide(args):
-                def one(s, a, b):
-                    hull_a = {k: v[consts["slot"][a]] for k, v in hulls1.items()}
-                    hull_b = {k: v[consts["slot"][b]] for k, v in hulls2.items()}
-                    return penetration_depth(pos[s, a], rot[s, a], hull_a, pos[s, b], rot[s, b], hull_b)
-
-                return jax.vmap(one)(*args)
-
-            shaped = [x.reshape(capacity // chunk, chunk) for x in (s, g1, g2)]
-            depth = jax.lax.map(collide, shaped).reshape(capacity)
-            dist = jnp.where(valid & (depth >= 0.0), -depth, jnp.inf)
-            return s, consts["b1"][p], consts["b2"][p], dist
-
-        def run(consts, pos, rot, keep, counts):
-            out = jnp.full((pos.shape[0], nbody, nbody), jnp.inf, pos.dtype)
-            for k, ((t1, t2, members), capacity) in enumerate(zip(self._classes, capacities)):
-                if capacity:
-                    s, b1, b2, dist = one_class(consts, pos, rot, keep, counts[k], (t1, t2), members, capacity)
-                    out = out.at[s, b1, b2].min(dist).at[s, b2, b1].min(dist)
-            return out
-
-        return jax.jit(run)
+    def _broad_phase(self, qpos: jax.Array):
+        return _poses_and_mask(self.mx, self._consts, jnp.asarray(qpos, dtype=jnp.float32), self.classes)
 
     def survivors(self, qpos: jax.Array) -> int:
         """How many (state, geom pair) items the broad phase passes to the narrow phase."""
-        return int(self._poses(self.mx, self._consts, jnp.asarray(qpos, dtype=jnp.float32))[3].sum())
+        return int(self._broad_phase(qpos)[3].sum())
 
     def __call__(self, qpos: jax.Array) -> jax.Array:
         qpos = jnp.asarray(qpos, dtype=jnp.float32)
         if not len(self.pairs):
             return jnp.full((qpos.shape[0], self.nbody, self.nbody), jnp.inf, jnp.float32)
-        pos, rot, keep, counts = self._poses(self.mx, self._consts, qpos)
+        pos, rot, keep, counts = self._broad_phase(qpos)
         capacities = tuple(capacity_for(int(c)) for c in np.asarray(counts))
-        if capacities not in self._narrow:
-            self._narrow[capacities] = self._narrow_phase(capacities)
-        return self._narrow[capacities](self._consts, pos, rot, keep, counts)
+        return _narrow_phase(self._consts, pos, rot, keep, counts, self.classes, capacities, self.nbody)
 
 
 def compile_pair_distances(model: mujoco.MjModel) -> PairDistances:

@@ -127,3 +127,24 @@ def test_non_mesh_collision_geoms_are_refused_by_name():
         </worldbody></mujoco>""")
     with pytest.raises(ValueError, match="'floor'"):
         PairDistances(model)
+
+
+def test_objects_of_one_structure_share_the_narrow_phase_compile():
+    """A lid box at two scales: same bodies, pairs and padded hull sizes, other numbers; the second
+    compiles no new narrow phase, and each gives its own (C-checked) answer."""
+    from eval.physics.cpu_backend import pair_distances
+    from eval.physics.sim_model import SimOptions, build_sim_model
+    from tests.physics.test_physics_cli_mjx import _lid_box
+
+    structure, parts = _lid_box()
+    qpos = np.random.default_rng(0).uniform(-1.8, 1.8, size=(48, 1))
+    compiled = []
+    for scale in (0.5, 0.8):
+        sim = build_sim_model(structure, parts, scale, SimOptions())
+        got = np.asarray(PairDistances(sim.model)(qpos), dtype=np.float64)
+        compiled.append(mjx_backend._narrow_phase._cache_size())
+        c = pair_distances(sim.model, qpos)
+        deep = c < -2e-3 * scale
+        assert deep.any() and np.array_equal(deep, got < -2e-3 * scale)
+        np.testing.assert_allclose(got[deep], c[deep], atol=1e-3)
+    assert compiled[1] == compiled[0]
