@@ -41,7 +41,7 @@ CHUNK_ITEMS = 16384  # narrow-phase items per vmapped chunk: bounds the memory o
 MIN_CAPACITY = 256  # smallest narrow-phase batch (smaller counts are padded up to it)
 COPLANAR_COS = 1.0 - 1e-9  # hull triangles whose normals agree this closely lie in one face
 SMALL_HULL_VERTICES = 8  # hulls of at most this many vertices (boxes, blocks) form their own size tier
-PAD_MULTIPLE = 8  # hull vertex, face and edge counts are padded up to a multiple of this
+PAD_MULTIPLE = 4  # hull vertex, face and edge counts are padded up to a multiple of this (a box keeps its 12 edges)
 
 
 @dataclass(frozen=True)

@@ -148,3 +148,23 @@ def test_objects_of_one_structure_share_the_narrow_phase_compile():
         assert deep.any() and np.array_equal(deep, got < -2e-3 * scale)
         np.testing.assert_allclose(got[deep], c[deep], atol=1e-3)
     assert compiled[1] == compiled[0]
+
+
+def test_both_backends_give_the_same_kinematic_verdicts():
+    """``check_object`` on C MuJoCo and on the batched MJX check: a good lid and one hinged the
+    wrong way (it swings into its base), same verdicts and reasons."""
+    from eval.physics.verdict import check_object
+    from jax3dc.structure import parse_structure, to_json
+    from tests.physics.test_physics_cli_mjx import _lid_box
+
+    structure, parts = _lid_box()
+    flipped = parse_structure(to_json(structure).replace('"axis":[-1.0,0.0,0.0]', '"axis":[1.0,0.0,0.0]'),
+                              part_ids=parts.keys())
+    verdicts = {}
+    for name, doc in (("good", structure), ("flipped", flipped)):
+        c = check_object(doc, parts, 0.5, backend="c", dynamics=False)
+        g = check_object(doc, parts, 0.5, backend="mjx", dynamics=False)
+        assert g == c, name
+        verdicts[name] = c["joints"]["2"]
+    assert verdicts["good"]["ok"] and not verdicts["flipped"]["ok"]
+    assert any(r.startswith("penetrates part 1") for r in verdicts["flipped"]["reasons"])
