@@ -8,7 +8,9 @@ part, in its own oriented box, at most ``BOARD_MAX_THICKNESS_NU`` thick) when, a
 from rest, one of its points goes from more than ``CROSSING_MARGIN_NU`` beyond one face to more than
 that beyond the other, meeting the board's plane over its material (a cell of its face the board
 covers, a cell in from its edges: not a ring's hole, nor round a rim's edge). A board may also be
-a thin convex collision piece of a part modelled as one closed mesh (a bucket's wall), and the
+a thin convex collision piece of a part modelled as one closed mesh (a bucket's wall); where such a
+piece meets another piece of its part (a carcass's back wall on its floor) the wall goes on, so
+that edge is no edge to pass round (a turntable swung out through the corner). The
 moving part may be the board (a door leaf swung through a handle that stays). Parts lying across
 a board's plane at rest (a sash in its frame, a shaft through its panel) are left alone. Pure numpy on the
 rest-frame meshes; joint values as in the sweep (rad / nu), every other joint at rest.
@@ -32,6 +34,7 @@ MIN_BOARD_NU = 0.05  # boards smaller than this across their face are left out (
 CROSSING_CELL_NU = 0.03  # resolution of a board's face map (where its material is)
 FLUSH_NU = 0.005  # a point this close to a board's face at rest is flush with it, not past it
 CROSSING_STEP_NU = 0.02  # largest point travel between the path states checked (a board's margin)
+JOIN_GAP_NU = 0.01  # a collision piece this close beyond a piece board's edge, across its thickness, continues the wall
 BOARD_MAX_THICKNESS_NU = 0.06  # thicker components are not boards: a part through them is deeper than
 # PENETRATION_TOL_NU, and a bulky concave one (a bucket as one mesh) is straddled, not crossed
 
@@ -39,12 +42,14 @@ BOARD_MAX_THICKNESS_NU = 0.06  # thicker components are not boards: a part throu
 @dataclass(frozen=True)
 class Board:
     """A thin component in its oriented box: centre, axes (rows, thin axis first), half extents,
-    and which CROSSING_CELL_NU cells of its face its material covers (less a cell at its edges)."""
+    which CROSSING_CELL_NU cells of its face its material covers (less a cell at its free edges),
+    and how far inside each edge a crossing must meet its plane."""
 
     centre: np.ndarray
     axes: np.ndarray
     half: np.ndarray
     covered: np.ndarray  # [n_u, n_w] bool
+    inset: np.ndarray  # [2 (u, w), 2 (low, high edge)]: CROSSING_MARGIN_NU at a free edge, 0 where the wall goes on
 
     def cells_of(self, uw: np.ndarray) -> np.ndarray:
         grid = np.zeros(self.covered.shape, dtype=bool)
@@ -136,7 +141,8 @@ class _Track:
             a, b = self.seen[flips], local[flips]
             w = (a[:, 0] / (a[:, 0] - b[:, 0]))[:, None]
             at = a[:, 1:] + w * (b[:, 1:] - a[:, 1:])  # where each point met the mid-plane
-            inside = np.all(np.abs(at) <= self.board.half[1:] - CROSSING_MARGIN_NU, axis=1)
+            half, inset = self.board.half[1:], self.board.inset
+            inside = np.all((at >= -half + inset[:, 0]) & (at <= half - inset[:, 1]), axis=1)
             crossed = bool(inside.any()) and bool(np.any(self.board.covered & self.board.cells_of(at[inside])))
         seen = side != 0
         self.side = np.where(seen, side, self.side)
@@ -165,25 +171,52 @@ def _boards(mesh: trimesh.Trimesh) -> list[Board]:
             continue
         centre, axes, half = frame
         shape = np.maximum(1, np.ceil(2 * half[1:] / CROSSING_CELL_NU).astype(int))
-        empty = Board(centre, axes, half, np.zeros(shape, dtype=bool))
+        inset = np.full((2, 2), CROSSING_MARGIN_NU)
+        empty = Board(centre, axes, half, np.zeros(shape, dtype=bool), inset)
         material = np.concatenate([v, np.asarray(c.sample(2000, seed=0), dtype=np.float64)]) if len(c.faces) else v
         # one cell in from the material's edges: passing a rim's edge is not passing through it
         covered = binary_erosion(empty.cells_of(((material - centre) @ axes.T)[:, 1:]), np.ones((3, 3)), border_value=0)
-        out.append(Board(centre, axes, half, covered))
+        out.append(Board(centre, axes, half, covered, inset))
     return out
 
 
 def _piece_boards(pieces: list[np.ndarray]) -> list[Board]:
-    """The thin convex collision pieces of a part as boards: convex, each covers its whole face."""
+    """The thin convex collision pieces of a part as boards: convex, each covers its whole face but
+    a cell at each free edge (an edge where another piece goes on is not free, see ``_joined``)."""
     out = []
-    for v in pieces:
-        frame = _thin_frame(np.asarray(v, dtype=np.float64))
+    pieces = [np.asarray(v, dtype=np.float64) for v in pieces]
+    for i, v in enumerate(pieces):
+        frame = _thin_frame(v)
         if frame is None:
             continue
         centre, axes, half = frame
         shape = np.maximum(1, np.ceil(2 * half[1:] / CROSSING_CELL_NU).astype(int))
-        covered = binary_erosion(np.ones(shape, dtype=bool), np.ones((3, 3)), border_value=0)
-        out.append(Board(centre, axes, half, covered))
+        joined = _joined(centre, axes, half, [w for j, w in enumerate(pieces) if j != i])
+        covered = np.ones(shape, dtype=bool)
+        for end, index in ((0, 0), (1, -1)):
+            if not joined[0, end]:
+                covered[index, :] = False
+            if not joined[1, end]:
+                covered[:, index] = False
+        out.append(Board(centre, axes, half, covered, np.where(joined, 0.0, CROSSING_MARGIN_NU)))
+    return out
+
+
+def _joined(centre: np.ndarray, axes: np.ndarray, half: np.ndarray, others: list[np.ndarray]) -> np.ndarray:
+    """[2 (u, w), 2 (low, high)] bool: another piece lies across the board's thickness and along
+    its edge, reaching from within JOIN_GAP_NU of that edge on past it (the wall goes on there)."""
+    out = np.zeros((2, 2), dtype=bool)
+    for v in others:
+        local = (v - centre) @ axes.T
+        lo, hi = local.min(axis=0), local.max(axis=0)
+        if hi[0] < -half[0] or lo[0] > half[0]:
+            continue  # not across the board's thickness
+        for axis in (1, 2):
+            along = 3 - axis  # the in-plane axis running along this edge
+            if hi[along] < -half[along] or lo[along] > half[along]:
+                continue
+            out[axis - 1, 0] |= bool(lo[axis] < -half[axis] and hi[axis] >= -half[axis] - JOIN_GAP_NU)
+            out[axis - 1, 1] |= bool(hi[axis] > half[axis] and lo[axis] <= half[axis] + JOIN_GAP_NU)
     return out
 
 
