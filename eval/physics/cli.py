@@ -19,7 +19,8 @@ VERDICT_HELP = (
     'The verdict is JSON: {"ok": bool, "joints": {"<part id>": {"ok": bool, "reasons": [...]}}, '
     '"checks": {"rest": [...], "combinations": [...], "gravity": [...]}}. Reasons are short strings such as '
     '"penetrates part 3 at q=1.200", "detached from parent at q=0.400", "pivot detached", '
-    '"limit unreachable: hi (stops at q=0.9)", "unstable under gravity: ..."; joint values are radians '
+    '"limit unreachable: hi (stops at q=0.9)", "disagrees with part 5 (symmetric): ..." (its mirror twin '
+    'moves otherwise), "unstable under gravity: ..."; joint values are radians '
     "(hinge) or normalised units (slide). Tolerances: eval/physics/tolerances.py."
 )
 

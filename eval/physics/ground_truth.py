@@ -66,8 +66,8 @@ def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, tri
     knob, a wheel) occupies the same space whatever its range. A changed parent is compared state
     by state over random states of all joints (a new parent welded to the old one moves the same).
     """
-    from eval.physics.kinematics import (SAME_MOTION_TOL_NU, subtree_points, subtree_vertices_at, sweep_distance,
-                                         symmetric_about)
+    from eval.physics.kinematics import (SAME_MOTION_TOL_NU, same_line, subtree_points, subtree_vertices_at,
+                                         sweep_distance, symmetric_about)
     before, after = original.nodes[mutation.part], mutation.structure.nodes[mutation.part]
     if before.parent != after.parent:
         a = subtree_vertices_at(original, parts, mutation.part)
@@ -75,18 +75,9 @@ def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, tri
         return a.shape != b.shape or not np.allclose(a, b, atol=SAME_MOTION_TOL_NU)
     points = subtree_points(original, parts, mutation.part)
     ja, jb = before.joint, after.joint
-    if ja.type == jb.type == "hinge" and _same_line(ja, jb) and symmetric_about(points, ja):
+    if ja.type == jb.type == "hinge" and same_line(ja, jb) and symmetric_about(points, ja):
         return False
     return sweep_distance(ja, jb, points) > SAME_MOTION_TOL_NU
-
-
-def _same_line(a, b) -> bool:
-    """Two hinge axes on one line (either direction)."""
-    from eval.physics.kinematics import SAME_MOTION_TOL_NU
-    u = np.asarray(a.axis, float) / np.linalg.norm(a.axis)
-    v = np.asarray(b.axis, float) / np.linalg.norm(b.axis)
-    d = np.asarray(b.pivot, float) - np.asarray(a.pivot, float)
-    return abs(abs(u @ v) - 1) < 1e-6 and np.linalg.norm(d - (d @ u) * u) < SAME_MOTION_TOL_NU
 
 
 def mutation_detection(objects: Iterable[GroundTruthObject], on_result: Callable | None = None) -> dict:

@@ -106,3 +106,11 @@ def symmetric_about(points: np.ndarray, joint: Joint, tol: float = SAME_MOTION_T
         if tree.query(joint_motion(joint, float(angle), points))[0].max() > tol * 2:
             return False
     return True
+
+
+def same_line(a: Joint, b: Joint, tol: float = SAME_MOTION_TOL_NU) -> bool:
+    """Two hinge axes on one line (either direction), the pivots within ``tol`` of it."""
+    u = np.asarray(a.axis, float) / np.linalg.norm(a.axis)
+    v = np.asarray(b.axis, float) / np.linalg.norm(b.axis)
+    d = np.asarray(b.pivot, float) - np.asarray(a.pivot, float)
+    return abs(abs(u @ v) - 1) < 1e-6 and np.linalg.norm(d - (d @ u) * u) < tol

@@ -2,7 +2,8 @@
 
 Used to measure how often the checks catch a wrong prediction, and whether for the right reason.
 Each mutation names the reasons ("penetrates", "detached", "pivot detached", "limit unreachable",
-"penetrates parent at rest") any of which counts as a correct flag of the mutated joint.
+"penetrates parent at rest", "disagrees with part": its mirror twin or duplicate articulates
+otherwise) any of which counts as a correct flag of the mutated joint.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import trimesh
 
 from jax3dc.structure.schema import Joint, Structure
 
+RELATION = "disagrees with part"  # the reason of eval.physics.relations
 PIVOT_SHIFT_NU = 0.25  # how far "pivot moved" moves the pivot off the part boundary
 
 
@@ -35,7 +37,7 @@ def mutations_of(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> lis
         if joint is None:
             continue
         axis = np.asarray(joint.axis, dtype=np.float64)
-        motion = ("penetrates", "detached", "limit unreachable")
+        motion = ("penetrates", "detached", "limit unreachable", RELATION)
         out.append(Mutation("flipped axis", part, _with_joint(structure, part, dataclasses.replace(
             joint, axis=tuple(-axis))), motion))
         out.append(Mutation("range doubled", part, _with_joint(structure, part, dataclasses.replace(
@@ -50,11 +52,11 @@ def mutations_of(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> lis
         far = _farthest_other_part(structure, part, centroids)
         if far is not None:
             out.append(Mutation("attached to a far part", part, _with_parent(structure, part, far),
-                                ("pivot detached", "detached", "penetrates")))
+                                ("pivot detached", "detached", "penetrates", RELATION)))
         wrong = _other_non_descendant(structure, part, node.parent, centroids)
         if wrong is not None and wrong != far:
             out.append(Mutation("wrong parent", part, _with_parent(structure, part, wrong),
-                                ("pivot detached", "detached", "penetrates")))
+                                ("pivot detached", "detached", "penetrates", RELATION)))
     return out
 
 

@@ -7,7 +7,8 @@ Reasons are short stable strings: "penetrates parent at rest", "penetrates part 
 "penetrates the floor at q=V" (below the rest pose's lowest point, where the gravity test's floor is),
 "detached from parent at q=V", "detached from parent at rest (gap G nu)" (a joint needs its two bodies
 to meet: REST_CONTACT_TOL_NU), "detached from its guide (part G, ...)" (a slide child carried out of the
-part it runs in, see ``guides``), "pivot detached", "limit unreachable: lo|hi", and object-level
+part it runs in, see ``guides``), "pivot detached", "limit unreachable: lo|hi", "disagrees with part B
+(symmetric|instance): ..." (a related part articulates otherwise, see ``relations``), and object-level
 "rest interpenetration: parts A,B" (fails the object), "combination interpenetration: parts A,B"
 (reported only), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
 """
@@ -24,6 +25,7 @@ from eval.physics.crossing import crossings
 from eval.physics.dynamics import gravity, reachability, tolerated_pairs
 from eval.physics.floor import first_below_floor
 from eval.physics.guides import carried_out_of_guide, welded
+from eval.physics.relations import relation_disagreements
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch, check_states
 from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_CONTACT_TOL_NU, RECONTACT_DEPTH_NU,
@@ -187,6 +189,8 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
             reasons[part].append(f"detached from parent at rest (gap {shown})")
         if not _pivot_attached(structure, parts, part):
             reasons[part].append("pivot detached")
+    for part, found in relation_disagreements(structure, parts).items():
+        reasons[part] += found
     combos = states.joint == -2
     found = set()
     for s in np.nonzero(combos)[0]:
