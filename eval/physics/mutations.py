@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
+from eval.physics.relations import REASON as RELATION
 from jax3dc.structure.schema import Joint, Structure
 
-RELATION = "disagrees with part"  # the reason of eval.physics.relations
 PIVOT_SHIFT_NU = 0.25  # how far "pivot moved" moves the pivot off the part boundary
 
 

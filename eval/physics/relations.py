@@ -24,6 +24,8 @@ from eval.physics.kinematics import same_line, subtree_points, sweep_distance, s
 from eval.physics.tolerances import RELATION_FIT_NU, RELATION_MOTION_TOL_NU
 from jax3dc.structure.schema import Joint, Relation, Structure
 
+REASON = "disagrees with part"  # how each reason of this check starts
+
 
 def relation_disagreements(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> dict[int, list[str]]:
     """Per jointed part: "disagrees with part B (symmetric|instance): ..." for each related part
@@ -43,7 +45,7 @@ def relation_disagreements(structure: Structure, parts: dict[int, trimesh.Trimes
             continue
         for this, other in ((a, b), (b, a)):
             if structure.nodes[this].joint is not None:
-                out.setdefault(this, []).append(f"disagrees with part {other} ({relation.type}): {problem}")
+                out.setdefault(this, []).append(f"{REASON} {other} ({relation.type}): {problem}")
     return out
 
 
