@@ -8,7 +8,9 @@ mutated joint sweeps the same poses as the original. ``--details FILE`` writes o
 flagged ground-truth joint and per missed mutation, to find which check misses.
 
 CPU, a few minutes: python3 bench/physics_ground_truth.py --seeds 1 (--workers N: N processes; 3 seeds
-take about 38 min on one core, 3 min with 16 workers)
+take about 38 min on one core, 3 min with 16 workers). ``--backend mjx`` runs the same checks on MJX
+(kinematics and rollouts), to compare its verdicts with C's: identical ``--details`` files mean the
+same flagged joints and the same missed mutations.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywher
 DEFAULT_FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "partnet_mobility"
 
 
-def _measure(obj, mutations: bool) -> tuple[dict, dict, list[str], list[str]]:
+def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str], list[str]]:
     """One object's false alarms and mutation counts, its flagged joints (printed) and detail lines."""
     from eval.physics.ground_truth import false_alarms, mutation_detection
 
@@ -50,8 +52,11 @@ def _measure(obj, mutations: bool) -> tuple[dict, dict, list[str], list[str]]:
             details.append(json.dumps({"kind": mutation.kind, "object": obj.name, "part": mutation.part,
                                        "reasons": reasons}))
 
-    truth = false_alarms([obj], on_truth)
-    per_kind = mutation_detection([obj], on_mutation) if mutations else {}
+    truth = false_alarms([obj], on_truth, backend)
+    per_kind = mutation_detection([obj], on_mutation, backend) if mutations else {}
+    if backend == "mjx":  # each object's models compile anew: keep a worker's memory flat
+        import jax
+        jax.clear_caches()
     return truth, per_kind, flagged, details
 
 
@@ -64,6 +69,8 @@ def main() -> None:
     parser.add_argument("--details", type=Path, help="write flagged ground-truth joints and missed mutations (JSON lines)")
     parser.add_argument("--no-mutations", action="store_true", help="false alarms only")
     parser.add_argument("--workers", type=int, default=1, help="objects checked in parallel processes (default %(default)s)")
+    parser.add_argument("--backend", choices=("c", "mjx"), default="c",
+                        help="simulator of the checks (default %(default)s; mjx compiles per object model)")
     args = parser.parse_args()
     warnings.filterwarnings("ignore")
 
@@ -76,7 +83,7 @@ def main() -> None:
     fixtures = sorted(d for d in Path(args.fixtures).iterdir() if d.is_dir()) if args.fixtures and Path(args.fixtures).is_dir() else []
     objects = list(factory_objects(categories, range(args.seeds))) + list(imported_objects(fixtures))
     t0 = time.perf_counter()
-    measure = functools.partial(_measure, mutations=not args.no_mutations)
+    measure = functools.partial(_measure, mutations=not args.no_mutations, backend=args.backend)
     with ProcessPoolExecutor(args.workers) if args.workers > 1 else contextlib.nullcontext() as pool:
         results = pool.map(measure, objects) if pool else map(measure, objects)
         results = list(tqdm(results, total=len(objects), desc="objects", unit="object"))

@@ -1,12 +1,15 @@
 """The two checks that need dynamics: limit reachability and stability under gravity.
 
-Both are short rollouts from rest through ``mujoco.rollout`` (C, threaded). For reachability,
+Both are short rollouts from rest, batched: ``cpu_backend.final_qpos`` (C, ``mujoco.rollout``
+threads) or ``mjx_dynamics.mjx_final_qpos`` (vmapped MJX steps), passed as ``rollout``. For reachability,
 contacts are frictionless and only the part pairs that collide along the kinematic sweeps stay in
 contact (``tolerated_pairs``), so a joint stops at a collision the sweep found, at its own limit,
 or where its servo loses against gravity.
 """
 
 from __future__ import annotations
+
+from typing import Callable
 
 import mujoco
 import numpy as np
@@ -21,9 +24,12 @@ from jax3dc.structure.schema import Structure
 
 SETTLE_STEPS = 400  # 0.8 s at the model's 2 ms step
 
+Rollout = Callable[[mujoco.MjModel, np.ndarray, np.ndarray, int], np.ndarray]  # (model, qpos, ctrl, nstep) -> final qpos
+
 
 def reachability(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float,
-                 exclude: frozenset[tuple[int, int]], pieces) -> dict[int, list[str]]:
+                 exclude: frozenset[tuple[int, int]], pieces,
+                 rollout: Rollout = cpu_backend.final_qpos) -> dict[int, list[str]]:
     """Per jointed part: "limit unreachable: lo|hi (stops at q=V)" when its servo cannot get there."""
     sim = build_sim_model(structure, parts, scale, SimOptions(actuators=True, exclude=exclude, frictionless=True), pieces)
     rest = sim.model.qpos0
@@ -36,7 +42,7 @@ def reachability(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
             rows.append((k, end))
     if not rows:
         return {}
-    final = cpu_backend.final_qpos(sim.model, np.repeat(rest[None], len(rows), axis=0), np.asarray(targets), SETTLE_STEPS)
+    final = rollout(sim.model, np.repeat(rest[None], len(rows), axis=0), np.asarray(targets), SETTLE_STEPS)
     reasons: dict[int, list[str]] = {p: [] for p in sim.joint_parts}
     for (k, end), q in zip(rows, final):
         unit = 1.0 if sim.joint_type[k] == "hinge" else scale
@@ -48,7 +54,8 @@ def reachability(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
     return reasons
 
 
-def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, pieces) -> tuple[list[str], dict[int, list[str]]]:
+def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, pieces,
+            rollout: Rollout = cpu_backend.final_qpos) -> tuple[list[str], dict[int, list[str]]]:
     """Object-level "unstable under gravity ..." and per-joint "sags under gravity" on a floor, joints held.
 
     Parts touch only the floor here: the object's own contacts are the kinematic checks' concern.
@@ -57,7 +64,7 @@ def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: floa
                                                               floor_contacts_only=True), pieces)
     model = sim.model
     rest = model.qpos0.copy()
-    final = cpu_backend.final_qpos(model, rest[None], rest[sim.joint_qpos][None], SETTLE_STEPS)[0]
+    final = rollout(model, rest[None], rest[sim.joint_qpos][None], SETTLE_STEPS)[0]
     problems: list[str] = []
     for j in range(model.njnt):
         if int(model.jnt_type[j]) != int(mujoco.mjtJoint.mjJNT_FREE):

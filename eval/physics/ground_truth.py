@@ -43,11 +43,11 @@ def imported_objects(directories: Iterable[Path]) -> Iterator[GroundTruthObject]
         yield GroundTruthObject(Path(directory).name, obj.structure, obj.parts, float(obj.meta.get("scale", 1.0)))
 
 
-def false_alarms(objects: Iterable[GroundTruthObject], on_result: Callable | None = None) -> dict:
+def false_alarms(objects: Iterable[GroundTruthObject], on_result: Callable | None = None, backend: str = "c") -> dict:
     joints = flagged = 0
     reasons: Counter = Counter()
     for obj in objects:
-        verdict = check_object(obj.structure, obj.parts, obj.scale)
+        verdict = check_object(obj.structure, obj.parts, obj.scale, backend=backend)
         for part, joint in verdict["joints"].items():
             joints += 1
             flagged += not joint["ok"]
@@ -80,7 +80,8 @@ def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, tri
     return sweep_distance(ja, jb, points) > SAME_MOTION_TOL_NU
 
 
-def mutation_detection(objects: Iterable[GroundTruthObject], on_result: Callable | None = None) -> dict:
+def mutation_detection(objects: Iterable[GroundTruthObject], on_result: Callable | None = None,
+                       backend: str = "c") -> dict:
     per_kind: dict[str, Counter] = {}
     for obj in objects:
         for mutation in mutations_of(obj.structure, obj.parts):
@@ -88,7 +89,7 @@ def mutation_detection(objects: Iterable[GroundTruthObject], on_result: Callable
             if not changes_motion(obj.structure, mutation, obj.parts):
                 counts["skipped (same motion)"] += 1
                 continue
-            verdict = check_object(mutation.structure, obj.parts, obj.scale)
+            verdict = check_object(mutation.structure, obj.parts, obj.scale, backend=backend)
             reasons = verdict["joints"][str(mutation.part)]["reasons"]
             counts["total"] += 1
             counts["flagged"] += bool(reasons)

@@ -37,8 +37,8 @@ def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
                  backend: str = "c", dynamics: bool = True) -> dict[str, Any]:
     """The verdict {"ok", "joints": {id: {"ok", "reasons"}}, "checks": {...}} of one object.
 
-    ``backend``: "c" (C MuJoCo) or "mjx" for the kinematic checks; ``dynamics`` adds limit
-    reachability and the gravity test (C rollouts).
+    ``backend``: "c" (C MuJoCo) or "mjx" for the kinematic checks and the rollouts; ``dynamics``
+    adds limit reachability and the gravity test.
     """
     return check_object_with_curves(structure, parts, scale, backend, dynamics)[0]
 
@@ -57,9 +57,14 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
         distances = mjx_pair_distances(bare.model, states.qpos)
     verdict = verdict_from(structure, parts, kinematic, states, distances, proximity)
     if dynamics:
+        if backend == "mjx":
+            from eval.physics.mjx_dynamics import mjx_final_qpos
+            rollout = mjx_final_qpos
+        else:
+            rollout = cpu_backend.final_qpos
         exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
-        extra = reachability(structure, parts, scale, exclude, kinematic.pieces)
-        problems, sag = gravity(structure, parts, scale, kinematic.pieces)
+        extra = reachability(structure, parts, scale, exclude, kinematic.pieces, rollout)
+        problems, sag = gravity(structure, parts, scale, kinematic.pieces, rollout)
         verdict["checks"]["gravity"] = problems
         for part, joint in verdict["joints"].items():
             joint["reasons"] += extra.get(int(part), []) + sag.get(int(part), [])

@@ -66,6 +66,32 @@ def test_simulation_model_has_what_the_checks_need(cabinet):
     assert visual and all(m.geom_contype[g] == 0 and m.geom_conaffinity[g] == 0 for g in visual)
 
 
+def test_gravity_model_meets_the_floor_through_one_hull_per_part(drawer_chest):
+    """Parts touch only the floor, each through one massless hull of all its pieces: the same mass and
+    inertia as colliding pieces, the same lowest points, and one floor pair per part."""
+    obj = drawer_chest
+    plain = build_sim_model(obj.structure, obj.parts, obj.scale_m_per_nu, SimOptions(floor=True, free_root=True))
+    hulls = build_sim_model(obj.structure, obj.parts, obj.scale_m_per_nu,
+                            SimOptions(floor=True, free_root=True, floor_contacts_only=True), plain.pieces)
+    m, p = hulls.model, plain.model
+    np.testing.assert_allclose(m.body_mass, p.body_mass, rtol=1e-9)
+    np.testing.assert_allclose(m.body_inertia, p.body_inertia, rtol=1e-9)
+    floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    touching = [g for g in range(m.ngeom) if g != floor and (m.geom_contype[g] & m.geom_conaffinity[floor]
+                                                               or m.geom_contype[floor] & m.geom_conaffinity[g])]
+    assert len(touching) == len(obj.parts) < sum(len(v) for v in plain.pieces.values())
+    assert not any(m.geom_contype[a] & m.geom_conaffinity[b] for a in touching for b in touching)
+    for g in touching:  # each hull reaches as low as its part's pieces
+        part = int(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g).rsplit("_", 1)[1])
+        data_p, data_m = mujoco.MjData(p), mujoco.MjData(m)
+        mujoco.mj_forward(p, data_p), mujoco.mj_forward(m, data_m)
+        body = hulls.part_body[part]
+        lowest_piece = min(float((data_p.xmat[body].reshape(3, 3) @ v.T)[2].min()) for v in plain.pieces[part])
+        vert = m.mesh_vert[m.mesh_vertadr[m.geom_dataid[g]]:][:m.mesh_vertnum[m.geom_dataid[g]]]
+        hull_low = float((data_m.geom_xmat[g].reshape(3, 3) @ vert.T)[2].min() + data_m.geom_xpos[g][2])
+        assert abs(hull_low - (lowest_piece + data_p.xpos[body][2])) < 1e-6
+
+
 @pytest.mark.parametrize("category", ["cabinet", "drawer_chest", "microwave", "refrigerator"])
 def test_ground_truth_passes(category):
     obj = generate_object(category, 0)
