@@ -81,10 +81,10 @@ def test_gravity_model_meets_the_floor_through_one_hull_per_part(drawer_chest):
                                                                or m.geom_contype[floor] & m.geom_conaffinity[g])]
     assert len(touching) == len(obj.parts) < sum(len(v) for v in plain.pieces.values())
     assert not any(m.geom_contype[a] & m.geom_conaffinity[b] for a in touching for b in touching)
+    data_p, data_m = mujoco.MjData(p), mujoco.MjData(m)
+    mujoco.mj_forward(p, data_p), mujoco.mj_forward(m, data_m)
     for g in touching:  # each hull reaches as low as its part's pieces
         part = int(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g).rsplit("_", 1)[1])
-        data_p, data_m = mujoco.MjData(p), mujoco.MjData(m)
-        mujoco.mj_forward(p, data_p), mujoco.mj_forward(m, data_m)
         body = hulls.part_body[part]
         lowest_piece = min(float((data_p.xmat[body].reshape(3, 3) @ v.T)[2].min()) for v in plain.pieces[part])
         vert = m.mesh_vert[m.mesh_vertadr[m.geom_dataid[g]]:][:m.mesh_vertnum[m.geom_dataid[g]]]

@@ -6,7 +6,6 @@ import re
 import warnings
 
 import numpy as np
-import trimesh
 
 from eval.physics import cpu_backend
 from eval.physics.dynamics import SETTLE_STEPS
