@@ -5,12 +5,15 @@ Printed: the false-alarm rate over joints (target <= 2%) with the reasons of the
 and per mutation kind (``eval.physics.mutations``) how many motion-changing mutations are flagged
 and flagged with an expected reason (target >= 95% overall), and how many were skipped because the
 mutated joint sweeps the same poses as the original. ``--details FILE`` writes one JSON line per
-flagged ground-truth joint and per missed mutation, to find which check misses.
+flagged ground-truth joint and per missed mutation, to find which check misses. ``--verdicts FILE``
+writes each object's ground-truth verdict per joint, and its seconds, as soon as the object is done,
+so a run cut short keeps what it finished.
 
 CPU, a few minutes: python3 bench/physics_ground_truth.py --seeds 1 (--workers N: N processes; 3 seeds
 take about 38 min on one core, 3 min with 16 workers). ``--backend mjx`` runs the same checks on MJX
 (kinematics and rollouts), to compare its verdicts with C's: identical ``--details`` files mean the
-same flagged joints and the same missed mutations.
+same flagged joints and the same missed mutations; ``--verdicts`` files of the two backends compare
+object by object over whatever both finished (``bench/compare_verdicts.py``).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import sys
 import time
 import warnings
 from collections import Counter
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
@@ -31,15 +34,19 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywher
 DEFAULT_FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "partnet_mobility"
 
 
-def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str], list[str]]:
-    """One object's false alarms and mutation counts, its flagged joints (printed) and detail lines."""
+def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str], list[str], str]:
+    """One object's false alarms and mutation counts, its flagged joints (printed), detail lines and
+    verdict line."""
     from eval.physics.ground_truth import false_alarms, mutation_detection
 
     warnings.filterwarnings("ignore")
     flagged: list[str] = []
     details: list[str] = []
+    verdicts: dict = {}
+    t0 = time.perf_counter()
 
     def on_truth(obj, verdict) -> None:
+        verdicts.update(verdict=verdict, seconds=round(time.perf_counter() - t0, 2))
         for part, joint in verdict["joints"].items():
             if joint["reasons"]:
                 flagged.append(f"  {obj.name} joint {part}: {'; '.join(joint['reasons'])}")
@@ -57,7 +64,8 @@ def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str],
     if backend == "mjx":  # each object's models compile anew: keep a worker's memory flat
         import jax
         jax.clear_caches()
-    return truth, per_kind, flagged, details
+    line = json.dumps({"object": obj.name, "backend": backend, **verdicts})
+    return truth, per_kind, flagged, details, line
 
 
 def main() -> None:
@@ -67,6 +75,7 @@ def main() -> None:
     parser.add_argument("--fixtures", default=str(DEFAULT_FIXTURES),
                         help="folder of PartNet-Mobility objects (default %(default)s; '' for none)")
     parser.add_argument("--details", type=Path, help="write flagged ground-truth joints and missed mutations (JSON lines)")
+    parser.add_argument("--verdicts", type=Path, help="write each object's ground-truth verdict as it finishes (JSON lines)")
     parser.add_argument("--no-mutations", action="store_true", help="false alarms only")
     parser.add_argument("--workers", type=int, default=1, help="objects checked in parallel processes (default %(default)s)")
     parser.add_argument("--backend", choices=("c", "mjx"), default="c",
@@ -84,9 +93,19 @@ def main() -> None:
     objects = list(factory_objects(categories, range(args.seeds))) + list(imported_objects(fixtures))
     t0 = time.perf_counter()
     measure = functools.partial(_measure, mutations=not args.no_mutations, backend=args.backend)
-    with ProcessPoolExecutor(args.workers) if args.workers > 1 else contextlib.nullcontext() as pool:
-        results = pool.map(measure, objects) if pool else map(measure, objects)
-        results = list(tqdm(results, total=len(objects), desc="objects", unit="object"))
+    results = []
+    with contextlib.ExitStack() as stack:
+        out = stack.enter_context(args.verdicts.open("w")) if args.verdicts else None
+        if args.workers > 1:
+            pool = stack.enter_context(ProcessPoolExecutor(args.workers))
+            done = (f.result() for f in as_completed([pool.submit(measure, obj) for obj in objects]))
+        else:
+            done = map(measure, objects)
+        for result in tqdm(done, total=len(objects), desc="objects", unit="object"):
+            results.append(result)
+            if out:
+                out.write(result[-1] + "\n")
+                out.flush()
     joints = sum(t["joints"] for t, *_ in results)
     flagged = sum(t["flagged"] for t, *_ in results)
     reasons = sum((Counter(t["reasons"]) for t, *_ in results), Counter())
@@ -94,13 +113,14 @@ def main() -> None:
           f"(target <= 2%), {len(objects)} objects, {time.perf_counter() - t0:.0f} s with {args.workers} worker(s)")
     for reason, n in reasons.most_common():
         print(f"  {n:4d}  {reason}")
-    print("\n".join(line for _, _, lines, _ in results for line in lines))
+    results.sort(key=lambda r: r[-1])  # completion order varies with the workers: print in object order
+    print("\n".join(line for _, _, lines, _, _ in results for line in lines))
     if args.details:
-        args.details.write_text("".join(line + "\n" for *_, lines in results for line in lines))
+        args.details.write_text("".join(line + "\n" for *_, lines, _ in results for line in lines))
     if args.no_mutations:
         return
     per_kind: dict[str, Counter] = {}
-    for _, kinds, _, _ in results:
+    for _, kinds, _, _, _ in results:
         for kind, counts in kinds.items():
             per_kind.setdefault(kind, Counter()).update(counts)
     print("\nmutation detection: flagged with the right reason, of the mutations that change the motion (target >= 95%)")
