@@ -40,7 +40,7 @@ def main() -> None:
 
     from data_pipeline.factories import generate_object
     from eval.physics import cpu_backend
-    from eval.physics.dynamics import SETTLE_STEPS, tolerated_pairs
+    from eval.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
     from eval.physics.mjx_dynamics import mjx_final_qpos
     from eval.physics.sim_model import SimOptions, build_sim_model
     from eval.physics.states import check_states
@@ -59,11 +59,11 @@ def main() -> None:
         distances = cpu_backend.pair_distances(kinematic.model, states.qpos)
         exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
         models = {
-            "reachability": SimOptions(actuators=True, exclude=exclude, frictionless=True),
-            "gravity": SimOptions(floor=True, free_root=True, actuators=True, floor_contacts_only=True),
+            "reachability": reachability_model(obj.structure, obj.parts, scale, exclude, kinematic.pieces),
+            "gravity": build_sim_model(obj.structure, obj.parts, scale, SimOptions(
+                floor=True, free_root=True, actuators=True, floor_contacts_only=True), kinematic.pieces),
         }
-        for check, options in models.items():
-            sim = build_sim_model(obj.structure, obj.parts, scale, options, kinematic.pieces)
+        for check, sim in models.items():
             m = sim.model
             start = np.repeat(m.qpos0[None], args.rollouts, axis=0)
             ctrl = rng.uniform(sim.joint_range[:, 0], sim.joint_range[:, 1], size=(args.rollouts, len(sim.joint_qpos)))
@@ -81,7 +81,7 @@ def main() -> None:
             tol = np.array([LIMIT_TOL_HINGE_RAD if t == "hinge" else LIMIT_TOL_SLIDE_NU * scale for t in sim.joint_type])
             within = float((gap <= tol).all(axis=1).mean())
             print(f"{obj.object_id} {check}: bodies {m.nbody} geoms {m.ngeom} joints {len(sim.joint_qpos)} "
-                  f"contact pairs excluded {len(options.exclude)} | C {c_rate:,.0f} rollouts/s "
+                  f"explicit contact pairs {m.npair} | tolerated pairs {len(exclude)} | C {c_rate:,.0f} rollouts/s "
                   f"({c_rate * SETTLE_STEPS:,.0f} steps/s) | MJX {g_rate:,.0f} rollouts/s "
                   f"({g_rate * SETTLE_STEPS:,.0f} steps/s) = {g_rate / c_rate:.2f}x C | MJX first call "
                   f"(compile + run) {first_s:.1f} s | final joint values: largest gap {gap.max():.4f}, "

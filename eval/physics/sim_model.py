@@ -47,6 +47,9 @@ class SimOptions:
     frictionless: bool = False  # condim 1: only collisions block motion (reachability)
     floor_contacts_only: bool = False  # parts touch the floor (one hull each) but not each other (gravity test)
     margin_m: float = 0.0  # contacts of moving parts are reported up to this distance apart (proximity)
+    # only these collision geom pairs (names) collide, through explicit frictionless pairs (requires
+    # ``frictionless``): MJX compiles one collision function per distinct mesh pair it may test
+    contact_pairs: frozenset[tuple[str, str]] | None = None
 
 
 @dataclass
@@ -74,6 +77,8 @@ class SimModel:
 def build_sim_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float,
                     options: SimOptions = SimOptions(), pieces: dict[int, list[np.ndarray]] | None = None) -> SimModel:
     """Compile the simulation model. ``pieces`` (from an earlier build) skips the decomposition."""
+    if options.contact_pairs is not None and not options.frictionless:
+        raise ValueError("SimOptions.contact_pairs are frictionless pairs: set frictionless=True as well")
     export = assemble(structure, parts, scale)
     if pieces is None:
         pieces = {p.part_id: convex_pieces(p.mesh, MIN_PIECE_M, scale) for p in export}
@@ -121,7 +126,7 @@ def _mjcf(export: list[ExportPart], pieces, scale: float, options: SimOptions, g
                       friction="1 0.005 0.0001", contype="1", conaffinity="2" if options.floor_contacts_only else "1")
     bodies: dict[int, ET.Element] = {}
     contact_bits = {"condim": "1"} if options.frictionless else {}
-    if options.floor_contacts_only:  # pieces give mass only; the floor hull geoms collide with the floor alone
+    if options.floor_contacts_only or options.contact_pairs is not None:  # pieces collide with the floor hulls' floor or through pairs alone
         contact_bits.update(contype="0", conaffinity="0")
     moving: dict[int, bool] = {}  # the part moves with some joint (only those need the proximity margin)
     for part in export:
@@ -154,10 +159,12 @@ def _mjcf(export: list[ExportPart], pieces, scale: float, options: SimOptions, g
                           contype="0", conaffinity="0", density="0", group="1",
                           rgba=vec(part.props.rgba))
     labels = {p.part_id: p.label for p in export}
-    if options.exclude:
+    if options.exclude or options.contact_pairs:
         contact = ET.SubElement(root, "contact")
         for a, b in sorted(options.exclude):
             ET.SubElement(contact, "exclude", body1=labels[a], body2=labels[b])
+        for a, b in sorted(options.contact_pairs or ()):
+            ET.SubElement(contact, "pair", geom1=a, geom2=b, condim="1")
     if options.actuators:
         actuator = ET.SubElement(root, "actuator")
         for part in (p for p in export if p.joint is not None):

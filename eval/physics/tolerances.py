@@ -17,6 +17,7 @@ GUIDE_ENCLOSE_TOL_NU = 0.02  # a guide's extent across the slide axis contains i
 RECONTACT_DEPTH_NU = 0.006  # a pair a sweep parts (or leaves grazing), then drives this much deeper into each other, meets a stop
 RELATION_FIT_NU = 0.02  # a relation's map (mirror, translation) carries one part's box onto the other's within this
 RELATION_MOTION_TOL_NU = 0.05  # related parts' sweeps (one mapped onto the other) may stray this far apart
+REACH_CANDIDATE_NU = 0.05  # collision pieces a joint's sweep brings this close collide in its reachability rollout (farther: cannot meet)
 LIMIT_TOL_HINGE_RAD = 0.08  # a hinge limit counts as reached within this angle
 LIMIT_TOL_SLIDE_NU = 0.03  # a slide limit counts as reached within this distance
 GRAVITY_DRIFT_NU = 0.05  # the root may move this far (after settling on the floor) under gravity
