@@ -2,10 +2,11 @@
 
 Ground truth is every factory category x ``--seeds`` seeds plus the PartNet-Mobility fixtures.
 Printed: the false-alarm rate over joints (target <= 2%) with the reasons of the flagged joints,
-and per mutation kind (``eval.physics.mutations``) how many motion-changing mutations are flagged
+the ground-truth objects whose whole verdict fails (a joint, rest interpenetration or the gravity
+test; factory categories mounted in use are checked as mounted), and per mutation kind (``eval.physics.mutations``) how many motion-changing mutations are flagged
 and flagged with an expected reason (target >= 95% overall), and how many were skipped because the
 mutated joint sweeps the same poses as the original. ``--details FILE`` writes one JSON line per
-flagged ground-truth joint and per missed mutation, to find which check misses. ``--verdicts FILE``
+flagged ground-truth joint, failed ground-truth object and missed mutation, to find which check misses. ``--verdicts FILE``
 writes each object's ground-truth verdict per joint, and its seconds, as soon as the object is done,
 so a run cut short keeps what it finished.
 
@@ -52,6 +53,10 @@ def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str],
                 flagged.append(f"  {obj.name} joint {part}: {'; '.join(joint['reasons'])}")
                 details.append(json.dumps({"kind": "false alarm", "object": obj.name, "part": int(part),
                                            "reasons": joint["reasons"]}))
+        whole = verdict["checks"].get("rest", []) + verdict["checks"].get("gravity", [])
+        if whole:  # object-level findings that fail the verdict
+            flagged.append(f"  {obj.name} object: {'; '.join(whole)}")
+            details.append(json.dumps({"kind": "object fails", "object": obj.name, "reasons": whole}))
 
     def on_mutation(obj, mutation, verdict) -> None:
         reasons = verdict["joints"][str(mutation.part)]["reasons"]
@@ -113,6 +118,8 @@ def main() -> None:
           f"(target <= 2%), {len(objects)} objects, {time.perf_counter() - t0:.0f} s with {args.workers} worker(s)")
     for reason, n in reasons.most_common():
         print(f"  {n:4d}  {reason}")
+    failed = [name for t, *_ in results for name in t["objects_failed"]]
+    print(f"objects whose verdict fails: {len(failed)} of {len(objects)} ({', '.join(sorted(failed)) or 'none'})")
     results.sort(key=lambda r: r[-1])  # completion order varies with the workers: print in object order
     print("\n".join(line for _, _, lines, _, _ in results for line in lines))
     if args.details:

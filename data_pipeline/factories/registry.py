@@ -24,6 +24,7 @@ class Factory:
     category: str
     build: Build
     instance_heavy: bool = False
+    mounted: bool = False  # fixed to a wall, counter or floor in use: it need not stand free (physics gravity test)
 
 
 @dataclass
@@ -82,8 +83,12 @@ _SHELVES: dict[str, Build] = {
     "triangle_shelf": shelves.triangle_shelf,
 }
 
+# Fixed in place where they are used: a faucet on its sink, a toilet bolted to the floor, a door
+# frame and a window frame set in a wall.
+_MOUNTED = frozenset({"faucet", "toilet", "door", "window"})
+
 FACTORIES: dict[str, Factory] = {
-    **{name: Factory(name, build) for name, build in _BUILDS.items()},
+    **{name: Factory(name, build, mounted=name in _MOUNTED) for name, build in _BUILDS.items()},
     **{name: Factory(name, build, instance_heavy=True) for name, build in _SHELVES.items()},
 }
 

@@ -127,6 +127,9 @@ def kitchen_unit(w: ProgramWriter, rng: np.random.Generator) -> None:
     cuts = (hole,) if hole is not None else ()
     body = w.part("body", kit.carcass(w, width, depth, height - plinth, t, z0=plinth, extra_cuts=cuts), mat)
     w.part("plinth", w.box((width, 0.018, plinth), (0.0, -depth / 2 + 0.06, plinth / 2)), mat, parent=body)
+    # the carcass stands on four feet behind the plinth (on the plinth board alone it would rock back)
+    feet = [(x, y) for x in (-width / 2 + 0.05, width / 2 - 0.05) for y in (-depth / 2 + 0.12, depth / 2 - 0.05)]
+    kit.legs(w, body, feet, plinth, 0.0, 0.03, mat, round_legs=True, name="foot")
     slab = w.box((width + 0.01, depth + 0.04, top_t), (0.0, -0.02, height + top_t / 2))
     counter = w.part("countertop", w.difference(slab, hole) if hole is not None else slab, top_mat, parent=body)
     drawer_h = u(rng, 0.13, 0.18)

@@ -40,13 +40,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     check.add_argument("--out", type=Path, default=None, help="also write the verdict JSON here")
     check.add_argument("--backend", choices=("c", "mjx"), default="c",
                        help="kinematic checks through C MuJoCo (default; fast on CPU) or MJX (for a GPU)")
+    check.add_argument("--mounted", action="store_true",
+                       help="the object is fixed in place in use (a faucet, a toilet, a door frame): the gravity "
+                            "test holds its root instead of standing it free on a floor")
     check.set_defaults(func=run_check)
     sweep = sub.add_parser(
         "sweep", help="check every object of a data build and write a report",
         description="Check the first rest-pose record of every object in a data build (ArrayRecord shards: "
                     "target structure + part program) and write OUT/verdicts.jsonl, OUT/summary.json, "
                     "OUT/index.md and OUT/plots/<object>.png (deepest penetration against each joint's value). "
-                    "Records without a part program (imports) are listed as skipped. " + VERDICT_HELP)
+                    "Records without a part program (imports) are listed as skipped. Objects of a factory "
+                    "category mounted in use (faucet, toilet, door, window) are checked as --mounted. " + VERDICT_HELP)
     sweep.add_argument("shards", type=Path, help="data build folder (manifest.json + *.array_record)")
     sweep.add_argument("--out", type=Path, default=Path("physics_report"), help="report folder (default: %(default)s)")
     sweep.add_argument("--limit", type=int, default=None, help="check at most this many objects")
@@ -82,7 +86,7 @@ def run_check(args: argparse.Namespace) -> int:
     parts = load_parts(args.parts)
     structure = parse_structure(text, part_ids=parts.keys())
     scale = _checked_scale(args.scale if args.scale is not None else _scale_beside(args.structure), args.structure)
-    verdict = check_object(structure, parts, scale, backend=args.backend)
+    verdict = check_object(structure, parts, scale, backend=args.backend, mounted=args.mounted)
     text = json.dumps(verdict, indent=1)
     print(text)
     if args.out:
@@ -97,6 +101,7 @@ def run_check(args: argparse.Namespace) -> int:
 def run_sweep(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    from data_pipeline.factories import FACTORIES
     from eval.physics.report import write_report
     from eval.physics.verdict import check_object_with_curves
     from jax3dc.program import run_program
@@ -118,8 +123,11 @@ def run_sweep(args: argparse.Namespace) -> int:
             continue
         parts = run_program(record.program).parts
         structure = parse_structure(record.target, part_ids=parts.keys())
-        verdict, curves = check_object_with_curves(structure, parts, float(record.meta.get("scale", 1.0)))
-        results.append({"object": object_id, "category": record.meta.get("category"), "verdict": verdict,
+        category = record.meta.get("category")
+        mounted = category in FACTORIES and FACTORIES[category].mounted
+        verdict, curves = check_object_with_curves(structure, parts, float(record.meta.get("scale", 1.0)),
+                                                   mounted=mounted)
+        results.append({"object": object_id, "category": category, "verdict": verdict,
                         "curves": curves})
     summary = write_report(results, skipped, args.out)
     print(json.dumps(summary, indent=1))

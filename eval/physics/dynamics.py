@@ -114,13 +114,15 @@ def _reach_radius(sim: SimModel, k: int, data: mujoco.MjData) -> float:
 
 
 def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, pieces,
-            rollout: Rollout = cpu_backend.final_qpos) -> tuple[list[str], dict[int, list[str]]]:
+            rollout: Rollout = cpu_backend.final_qpos, mounted: bool = False) -> tuple[list[str], dict[int, list[str]]]:
     """Object-level "unstable under gravity ..." and per-joint "sags under gravity" on a floor, joints
     held (not for full-turn hinges: a wheel or dial turned is still a pose the object has).
 
     Parts touch only the floor here: the object's own contacts are the kinematic checks' concern.
+    A ``mounted`` object (a faucet on its sink, a toilet bolted down) keeps its root fixed: only
+    the held joints are tested.
     """
-    sim = build_sim_model(structure, parts, scale, SimOptions(floor=True, free_root=True, actuators=True,
+    sim = build_sim_model(structure, parts, scale, SimOptions(floor=not mounted, free_root=not mounted, actuators=True,
                                                               floor_contacts_only=True), pieces)
     model = sim.model
     rest = model.qpos0.copy()

@@ -34,17 +34,19 @@ from jax3dc.export.assembly import frames_nu, tree_order
 from jax3dc.structure.schema import Structure
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
-                 backend: str = "c", dynamics: bool = True) -> dict[str, Any]:
+                 backend: str = "c", dynamics: bool = True, mounted: bool = False) -> dict[str, Any]:
     """The verdict {"ok", "joints": {id: {"ok", "reasons"}}, "checks": {...}} of one object.
 
     ``backend``: "c" (C MuJoCo) or "mjx" for the kinematic checks and the rollouts; ``dynamics``
-    adds limit reachability and the gravity test.
+    adds limit reachability and the gravity test; ``mounted``: the object is fixed in place in use
+    (a faucet, a wall cabinet), so the gravity test holds its root instead of standing it on a floor.
     """
-    return check_object_with_curves(structure, parts, scale, backend, dynamics)[0]
+    return check_object_with_curves(structure, parts, scale, backend, dynamics, mounted)[0]
 
 
 def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
-                             backend: str = "c", dynamics: bool = True) -> tuple[dict[str, Any], dict[int, Any]]:
+                             backend: str = "c", dynamics: bool = True,
+                             mounted: bool = False) -> tuple[dict[str, Any], dict[int, Any]]:
     """``check_object`` and, per jointed part, (joint values, deepest penetration in nu) over its sweep."""
     with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
         kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale))
@@ -64,7 +66,7 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
             rollout = cpu_backend.final_qpos
         exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
         extra = reachability(structure, parts, scale, exclude, kinematic.pieces, rollout)
-        problems, sag = gravity(structure, parts, scale, kinematic.pieces, rollout)
+        problems, sag = gravity(structure, parts, scale, kinematic.pieces, rollout, mounted)
         verdict["checks"]["gravity"] = problems
         for part, joint in verdict["joints"].items():
             joint["reasons"] += extra.get(int(part), []) + sag.get(int(part), [])

@@ -10,7 +10,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from data_pipeline.factories import generate_object
+from data_pipeline.factories import FACTORIES, generate_object
 from eval.physics.verdict import check_object
 
 warnings.filterwarnings("ignore", category=RuntimeWarning)
@@ -35,7 +35,9 @@ def test_verdict_lines_hold_each_objects_check(tmp_path):
         obj = generate_object(category, 0)
         record = records[obj.object_id]
         assert record["backend"] == "c" and record["seconds"] > 0
-        assert record["verdict"] == json.loads(json.dumps(check_object(obj.structure, obj.parts, obj.scale_m_per_nu)))
+        expected = check_object(obj.structure, obj.parts, obj.scale_m_per_nu, mounted=FACTORIES[category].mounted)
+        assert record["verdict"] == json.loads(json.dumps(expected))
+    assert records["toilet_000000"]["verdict"]["ok"]  # a toilet is bolted down: checked mounted, it passes
 
 
 def _record(name: str, joints: dict[str, list[str]]) -> dict:
