@@ -239,11 +239,36 @@ def lamp(w: ProgramWriter, rng: np.random.Generator) -> None:
     upper = w.part("upper_arm", w.combine(pin, kit.rod(w, p1, p2, 0.008)), metal, parent=lower,
                    joint=JointSpec("hinge", (1.0, 0.0, 0.0), p1, (-0.8, drop2)))  # +: the head drops
     shade = w.cone(shade_r, shade_r * 0.3, shade_h, (0.0, p2[1], p2[2] - shade_h / 2 - 0.011), segments=24)
+    tilt = _shade_tilt(shade_r, shade_r * 0.3, shade_h, 0.011, (math.cos(a2), -math.sin(a2)), l2, 0.008)
     w.part("shade", shade, shade_mat, parent=upper,  # pivots about the top of the shade, under the arm's end
-           joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, p2[1], p2[2] - 0.011), (-0.6, 0.6)))
+           joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, p2[1], p2[2] - 0.011), (-0.6, tilt)))
 
 
 LAMP_SHADE_CLEARANCE_M = 0.01  # the shade stops this far above the desk, whatever the arms' poses
+
+
+def _shade_tilt(bottom_r: float, top_r: float, height: float, gap: float, arm_dir: tuple[float, float],
+                arm: float, rod_r: float) -> float:
+    """The largest tilt (rad, at most 0.6) of a conical shade, hung ``gap`` below the upper arm's end,
+    towards the arm (+ about x) before the cone meets the arm's rod (``arm_dir``: the rod's (y, z)
+    direction from that end; any overlap at rest is kept, not deepened): the arm is the shade's stop."""
+    h, phi = np.meshgrid(np.linspace(0.0, height, 9), np.linspace(0.0, 2 * math.pi, 48, endpoint=False), indexing="ij")
+    radius = top_r + (bottom_r - top_r) * h / height
+    xs, ys, zs = (radius * np.cos(phi)).ravel(), (radius * np.sin(phi)).ravel(), -h.ravel()
+    dy, dz = arm_dir
+
+    def clearance(t: float) -> float:
+        y, z = ys * math.cos(t) - zs * math.sin(t), ys * math.sin(t) + zs * math.cos(t) - gap  # from the arm's end
+        along = np.clip(y * dy + z * dz, 0.0, arm)
+        return float(np.min(np.sqrt(xs ** 2 + (y - along * dy) ** 2 + (z - along * dz) ** 2))) - rod_r
+
+    floor = min(clearance(0.0), 0.0)
+    best = 0.0
+    for t in np.linspace(0.0, 0.6, 61):
+        if clearance(float(t)) < floor:
+            break
+        best = float(t)
+    return round(best, 2)
 
 
 def _lamp_head_drops(pin_z: float, l1: float, a1: float, l2: float, a2: float, head_reach: float) -> tuple[float, float]:

@@ -1,5 +1,6 @@
-"""The ground-truth fixes of issue 8: the lamp's shade stays above the desk, the faucet lever turns
-without jamming, and a hinge on a part welded to its parent counts as attached."""
+"""The ground-truth fixes of issue 8: the lamp's shade stays above the desk and stops where it meets
+its arm, the faucet lever turns without jamming, and a hinge on a part welded to its parent counts
+as attached."""
 
 from __future__ import annotations
 
@@ -55,6 +56,22 @@ def test_lamp_with_the_old_range_goes_through_the_floor():
     nodes[lower] = dataclasses.replace(nodes[lower], joint=dataclasses.replace(nodes[lower].joint, range=(-0.6, 0.6)))
     old = dataclasses.replace(s, nodes=nodes)
     assert first_below_floor(old, lamp.parts, lower, np.linspace(-0.6, 0.6, 9)) is not None
+
+
+@pytest.mark.parametrize("seed", (0, 1))
+def test_lamp_shade_reaches_its_stop_at_the_arm_but_not_beyond(seed):
+    # the shade tilts towards its own arm until it meets the rod: the old +0.6 rad limit was
+    # out of reach for the servo (stops at 0.369 and 0.513 rad)
+    lamp = generate_object("lamp", seed)
+    shade = next(p for p, n in lamp.structure.nodes.items() if n.name == "shade")
+    joint = lamp.structure.nodes[shade].joint
+    assert joint.range[1] < 0.6
+    verdict = check_object(lamp.structure, lamp.parts, lamp.scale_m_per_nu)
+    assert verdict["ok"], verdict
+    nodes = dict(lamp.structure.nodes)
+    nodes[shade] = dataclasses.replace(nodes[shade], joint=dataclasses.replace(joint, range=(joint.range[0], 0.6)))
+    old = check_object(dataclasses.replace(lamp.structure, nodes=nodes), lamp.parts, lamp.scale_m_per_nu)
+    assert any(r.startswith(("limit unreachable: hi", "penetrates part")) for r in old["joints"][str(shade)]["reasons"]), old
 
 
 @pytest.mark.parametrize("seed", (0, 1, 2))
