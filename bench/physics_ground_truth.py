@@ -3,10 +3,11 @@
 Ground truth is every factory category x ``--seeds`` seeds plus the PartNet-Mobility fixtures.
 Printed: the false-alarm rate over joints (target <= 2%) with the reasons of the flagged joints,
 the ground-truth objects whose whole verdict fails (a joint, rest interpenetration or the gravity
-test; factory categories mounted in use are checked as mounted), and per mutation kind (``eval.physics.mutations``) how many motion-changing mutations are flagged
-and flagged with an expected reason (target >= 95% overall), and how many were skipped because the
-mutated joint sweeps the same poses as the original. ``--details FILE`` writes one JSON line per
-flagged ground-truth joint, failed ground-truth object and missed mutation, to find which check misses. ``--verdicts FILE``
+test; factory categories mounted in use are checked as mounted), and per mutation kind
+(``eval.physics.mutations``) how many motion-changing mutations are flagged and flagged with an
+expected reason (target >= 95% overall), and how many were skipped because the mutated joint sweeps
+the same poses as the original. ``--details FILE`` writes one JSON line per flagged ground-truth
+joint, failed ground-truth object and missed mutation, to find which check misses. ``--verdicts FILE``
 writes each object's ground-truth verdict per joint, and its seconds, as soon as the object is done,
 so a run cut short keeps what it finished.
 

@@ -48,12 +48,11 @@ def imported_objects(directories: Iterable[Path]) -> Iterator[GroundTruthObject]
 
 def false_alarms(objects: Iterable[GroundTruthObject], on_result: Callable | None = None, backend: str = "c") -> dict:
     """Flagged ground-truth joints (the issue's rate), and objects whose whole verdict fails."""
-    joints = flagged = objects_seen = 0
+    joints = flagged = 0
     reasons: Counter = Counter()
     failed: list[str] = []
     for obj in objects:
         verdict = check_object(obj.structure, obj.parts, obj.scale, backend=backend, mounted=obj.mounted)
-        objects_seen += 1
         if not verdict["ok"]:
             failed.append(obj.name)
         for part, joint in verdict["joints"].items():
@@ -63,7 +62,7 @@ def false_alarms(objects: Iterable[GroundTruthObject], on_result: Callable | Non
         if on_result:
             on_result(obj, verdict)
     return {"joints": joints, "flagged": flagged, "rate": flagged / max(joints, 1), "reasons": dict(reasons),
-            "objects": objects_seen, "objects_failed": failed}
+            "objects_failed": failed}
 
 
 def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, trimesh.Trimesh]) -> bool:

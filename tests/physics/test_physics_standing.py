@@ -12,26 +12,20 @@ import pytest
 from data_pipeline.factories import FACTORIES, generate_object
 from eval.physics.dynamics import gravity
 from eval.physics.ground_truth import factory_objects
-from eval.physics.sim_model import SimOptions, build_sim_model
 from eval.physics.tolerances import GRAVITY_TILT_RAD
 
 warnings.filterwarnings("ignore", category=RuntimeWarning)
-
-
-def _pieces(structure, parts, scale):
-    return build_sim_model(structure, parts, scale, SimOptions()).pieces
 
 
 def test_free_standing_faucet_falls_over_but_passes_mounted():
     # a faucet's spout overhangs its narrow body: stood free on a floor it falls onto its side
     obj = generate_object("faucet", 0)
     assert FACTORIES["faucet"].mounted
-    pieces = _pieces(obj.structure, obj.parts, obj.scale_m_per_nu)
-    free, _ = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, pieces)
+    free, _ = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None)
     assert len(free) == 1 and free[0].startswith("unstable under gravity"), free
     tilt = float(free[0].rsplit("tilted ", 1)[1].split()[0])
     assert tilt > 2 * GRAVITY_TILT_RAD, free  # it fell onto another face, not a rock onto a nearby support
-    held, sag = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, pieces, mounted=True)
+    held, sag = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None, mounted=True)
     assert held == [] and sag and not any(sag.values()), (held, sag)
 
 
@@ -40,8 +34,7 @@ def test_mounted_object_still_gets_the_sag_test(monkeypatch):
     # root does not stop the sag test from reporting it
     obj = generate_object("faucet", 0)
     monkeypatch.setattr("eval.physics.dynamics.GRAVITY_JOINT_DRIFT", -1.0)
-    _, sag = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, _pieces(obj.structure, obj.parts, obj.scale_m_per_nu),
-                     mounted=True)
+    _, sag = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None, mounted=True)
     assert sag and all(r and r[0].startswith("sags under gravity") for r in sag.values()), sag
 
 
@@ -50,7 +43,7 @@ def test_free_standing_ground_truth_stands(category):
     # eyeglasses rock back onto their temple ends; a kitchen unit stands on feet behind its plinth
     obj = next(factory_objects([category], [1]))
     assert not obj.mounted
-    problems, _ = gravity(obj.structure, obj.parts, obj.scale, _pieces(obj.structure, obj.parts, obj.scale))
+    problems, _ = gravity(obj.structure, obj.parts, obj.scale, None)
     assert problems == [], problems
 
 
