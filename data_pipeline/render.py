@@ -6,30 +6,24 @@ subtree) and the free camera. S comes from MuJoCo's segmentation pass (geom ids,
 mapped to part ids and painted with palette colours here, so it has no anti-aliasing: every
 pixel is the background or exactly one part's palette colour.
 
-The OpenGL backend is chosen in one place, :func:`configure_gl`, before mujoco is imported.
+The OpenGL backend is chosen by :func:`jax3dc.gl.configure_gl` before mujoco is imported.
 """
 
 from __future__ import annotations
 
 import io
-import os
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 
+from jax3dc.gl import configure_gl
 from jax3dc.materials import MATERIALS
 from jax3dc.palette import BACKGROUND_RGB, part_colour
 from jax3dc.structure import Structure
 
 DEFAULT_SIZE = 448
 PNG_COMPRESS_LEVEL = 6
-
-
-def configure_gl() -> str:
-    """MUJOCO_GL for headless rendering: the caller's choice, else EGL (works on CPU Mesa and GPUs)."""
-    return os.environ.setdefault("MUJOCO_GL", "egl")
-
 
 configure_gl()
 import mujoco  # noqa: E402  (after the GL backend is chosen)

@@ -12,6 +12,7 @@ import importlib
 import sys
 
 from jax3dc.errors import Jax3dcError
+from jax3dc.gl import configure_gl
 
 # Modules are imported lazily by name so that `jax3dc validate` does not pay for importing jax.
 COMMAND_MODULES: tuple[str, ...] = (
@@ -46,6 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="One image in, a structured, articulated, simulation-ready 3D object out.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    configure_gl()  # before the command modules: some import mujoco, which reads MUJOCO_GL only then
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)
     return parser

@@ -1,0 +1,19 @@
+"""The `jax3dc` command renders on a machine without a display even when MUJOCO_GL is unset.
+
+MuJoCo reads MUJOCO_GL once, at its first import; the command's parser imports modules that
+import mujoco (the physics checks), so the headless choice must be made before them.
+"""
+
+import os
+import subprocess
+import sys
+
+
+def test_data_build_renders_without_display_or_mujoco_gl(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY")}
+    out = tmp_path / "data"
+    r = subprocess.run([sys.executable, "-m", "jax3dc.cli", "data", "build", "--out", str(out), "--objects", "1",
+                        "--views", "1", "--size", "32", "--quiet"],
+                       env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert list(out.glob("*.array_record")), "no shard written"
