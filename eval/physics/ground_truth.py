@@ -29,7 +29,6 @@ class GroundTruthObject:
     mounted: bool = False  # fixed in place in use (a faucet, a toilet): the gravity test holds its root
 
 
-
 def factory_objects(categories: Iterable[str], seeds: Iterable[int]) -> Iterator[GroundTruthObject]:
     from data_pipeline.factories import FACTORIES, generate_object
     for category in categories:
