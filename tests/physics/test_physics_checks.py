@@ -50,6 +50,22 @@ def test_convex_part_is_one_capped_piece():
     assert len(pieces) == 1 and len(pieces[0]) == HULL_MAX_VERTICES
 
 
+def test_flat_part_is_thickened_and_checked(cabinet):
+    """A predicted part may have no thickness (stage 1 meshes a door as one quad): its collision
+    piece gets the minimum thickness instead of failing qhull, and the door checks like a thin one."""
+    door = next(p for p, node in cabinet.structure.nodes.items() if node.joint is not None)
+    lo, hi = cabinet.parts[door].bounds
+    front = lo[1]  # the door's outer face (front is -Y)
+    quad = trimesh.Trimesh([[lo[0], front, lo[2]], [hi[0], front, lo[2]], [hi[0], front, hi[2]],
+                            [lo[0], front, hi[2]]], [[0, 1, 2], [0, 2, 3]])
+    (piece,) = convex_pieces(quad, 1e-3)
+    assert np.ptp(piece[:, 1]) == pytest.approx(1e-3)
+    assert trimesh.convex.convex_hull(piece).volume > 0
+    parts = {**cabinet.parts, door: quad}
+    verdict = check_object(cabinet.structure, parts, cabinet.scale_m_per_nu)
+    assert verdict["ok"], verdict
+
+
 def test_simulation_model_has_what_the_checks_need(cabinet):
     sim = build_sim_model(cabinet.structure, cabinet.parts, cabinet.scale_m_per_nu,
                           SimOptions(floor=True, free_root=True, actuators=True, visual=True))
