@@ -4,15 +4,27 @@ MuJoCo reads MUJOCO_GL once, at its first import, and otherwise defaults to GLFW
 machine without a display at the first render. The `jax3dc` command imports modules that import
 mujoco (the physics checks) long before it renders, so both the command and the renderer call
 :func:`configure_gl` before their first ``import mujoco``.
+
+A headless backend is chosen only where its library is installed: ``import mujoco`` itself fails
+under MUJOCO_GL=egl without libEGL (a GPU machine without the Mesa/GLVND packages), and the
+physics checks, exports and training need no rendering at all.
 """
 
 from __future__ import annotations
 
 import os
+from ctypes.util import find_library
 
-HEADLESS_GL = "egl"  # Mesa's software EGL on a CPU machine, the driver's EGL on a GPU
+HEADLESS_GL = (("egl", "EGL"), ("osmesa", "OSMesa"))  # (MUJOCO_GL, library), in order of preference
 
 
-def configure_gl() -> str:
-    """MUJOCO_GL: the caller's choice, else headless EGL."""
-    return os.environ.setdefault("MUJOCO_GL", HEADLESS_GL)
+def configure_gl() -> str | None:
+    """MUJOCO_GL: the caller's choice, else the first headless backend whose library the machine
+    has, else unset (MuJoCo's GLFW default: rendering then needs a display)."""
+    if "MUJOCO_GL" in os.environ:
+        return os.environ["MUJOCO_GL"]
+    for backend, library in HEADLESS_GL:
+        if find_library(library):
+            os.environ["MUJOCO_GL"] = backend
+            return backend
+    return None

@@ -17,3 +17,17 @@ def test_data_build_renders_without_display_or_mujoco_gl(tmp_path):
                        env=env, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     assert list(out.glob("*.array_record")), "no shard written"
+
+
+def test_headless_backend_is_one_the_machine_has(monkeypatch):
+    """Under MUJOCO_GL=egl without libEGL, ``import mujoco`` itself fails (a bare GPU machine), so
+    the backend follows the installed libraries, and without any the variable stays unset."""
+    from jax3dc import gl
+
+    for installed, expected in [({"EGL", "OSMesa"}, "egl"), ({"OSMesa"}, "osmesa"), (set(), None)]:
+        monkeypatch.delenv("MUJOCO_GL", raising=False)
+        monkeypatch.setattr(gl, "find_library", lambda name: f"lib{name}.so.1" if name in installed else None)
+        assert gl.configure_gl() == expected
+        assert os.environ.get("MUJOCO_GL") == expected
+    monkeypatch.setenv("MUJOCO_GL", "glfw")  # the caller's choice is kept
+    assert gl.configure_gl() == "glfw"
