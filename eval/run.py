@@ -11,6 +11,7 @@ import argparse
 import json
 from pathlib import Path
 
+from jax3dc.cli import positive_int
 from jax3dc.errors import InputFileError, Jax3dcError
 
 
@@ -22,13 +23,6 @@ def _write_references(refs: list, path: Path) -> None:
         for ref in refs:
             line = {"key": ref.key, "structure": to_dict(ref.structure), "boxes": boxes_to_dict(ref.boxes)}
             f.write(json.dumps(line, separators=(",", ":")) + "\n")
-
-
-def _positive(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
 
 
 def run_eval(args: argparse.Namespace) -> int:
@@ -112,9 +106,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="score each record's own target (sanity check: everything must be 100)")
     run.add_argument("--split", default="test", help="split to evaluate: shard-name prefix and meta.split (default test)")
     run.add_argument("--limit", type=int, default=0, help="evaluate only the first N records (0 = all)")
-    run.add_argument("--batch-size", type=_positive, default=8, help="rows generated together (default 8)")
-    run.add_argument("--max-new-tokens", type=_positive, default=2048, help="generation stops here at the latest (default 2048)")
-    run.add_argument("--bucket", type=_positive, default=64,
+    run.add_argument("--batch-size", type=positive_int, default=8, help="rows generated together (default 8)")
+    run.add_argument("--max-new-tokens", type=positive_int, default=2048, help="generation stops here at the latest (default 2048)")
+    run.add_argument("--bucket", type=positive_int, default=64,
                      help="prompt lengths are padded to a multiple of this, limiting recompiles (default 64)")
     run.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"), help="parameter dtype (default bfloat16)")
     run.add_argument("--overlays", type=int, default=16, help="joint overlays for the first N records (default 16)")

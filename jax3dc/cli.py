@@ -41,6 +41,17 @@ def command_group(subparsers: argparse._SubParsersAction, name: str, **kwargs) -
     return parser.add_subparsers(dest=f"{name}_command", metavar="SUBCOMMAND")
 
 
+def positive_int(text: str) -> int:
+    """argparse type of counts that must be at least 1 (batch sizes, workers)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="jax3dc",
