@@ -7,12 +7,17 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import multiprocessing as mp
+import os
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from jax3dc.cli import command_group
+from jax3dc.cli import command_group, positive_int
 from jax3dc.errors import InputFileError
 
 VERDICT_HELP = (
@@ -49,11 +54,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Check the first rest-pose record of every object in a data build (ArrayRecord shards: "
                     "target structure + part program) and write OUT/verdicts.jsonl, OUT/summary.json, "
                     "OUT/index.md and OUT/plots/<object>.png (deepest penetration against each joint's value). "
-                    "Records without a part program (imports) are listed as skipped. Objects of a factory "
+                    "Records without a part program (imports), or whose program or target structure fails, are listed "
+                    "as skipped with the reason, and the sweep goes on. Objects of a factory "
                     "category mounted in use (faucet, toilet, door, window) are checked as --mounted. " + VERDICT_HELP)
     sweep.add_argument("shards", type=Path, help="data build folder (manifest.json + *.array_record)")
     sweep.add_argument("--out", type=Path, default=Path("physics_report"), help="report folder (default: %(default)s)")
     sweep.add_argument("--limit", type=int, default=None, help="check at most this many objects")
+    sweep.add_argument("--workers", type=positive_int, default=1,
+                       help="objects checked at once in separate processes (default %(default)s; the cores are "
+                            "shared among them for the rollouts)")
     sweep.set_defaults(func=run_sweep)
 
 
@@ -102,11 +111,8 @@ def run_sweep(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from data_pipeline.factories import FACTORIES
-    from eval.physics.report import write_report
-    from eval.physics.verdict import check_object_with_curves
-    from jax3dc.program import run_program
-    from jax3dc.structure import parse_structure
     from data_pipeline.shards import read_dataset
+    from eval.physics.report import write_report
 
     chosen: dict[str, Any] = {}
     for record in read_dataset(args.shards):
@@ -116,19 +122,60 @@ def run_sweep(args: argparse.Namespace) -> int:
         chosen[object_id] = record
         if args.limit and len(chosen) >= args.limit:
             break
-    results, skipped = [], []
-    for object_id, record in tqdm(chosen.items(), desc="physics sweep", unit="object"):
-        if not record.program:
-            skipped.append({"object": object_id, "why": "no part program in the record"})
-            continue
-        parts = run_program(record.program).parts
-        structure = parse_structure(record.target, part_ids=parts.keys())
+    threads = max(1, (os.cpu_count() or 1) // args.workers)
+    jobs = []
+    for object_id, record in chosen.items():
         category = record.meta.get("category")
         mounted = category in FACTORIES and FACTORIES[category].mounted
-        verdict, curves = check_object_with_curves(structure, parts, float(record.meta.get("scale", 1.0)),
-                                                   mounted=mounted)
-        results.append({"object": object_id, "category": category, "verdict": verdict,
-                        "curves": curves})
+        jobs.append(_SweepJob(object_id, category, record.program, record.target, float(record.meta.get("scale", 1.0)),
+                              mounted, threads, args.out))
+    with contextlib.ExitStack() as stack:
+        if args.workers > 1:  # spawned: a forked child would inherit the loader's threads and locks
+            pool = stack.enter_context(ProcessPoolExecutor(args.workers, mp_context=mp.get_context("spawn")))
+            done = pool.map(_check_job, jobs)
+        else:
+            done = map(_check_job, jobs)
+        outcomes = list(tqdm(done, total=len(jobs), desc="physics sweep", unit="object"))
+    results = [o for o in outcomes if "verdict" in o]
+    skipped = [o for o in outcomes if "why" in o]
     summary = write_report(results, skipped, args.out)
     print(json.dumps(summary, indent=1))
     return 0
+
+
+@dataclass(frozen=True)
+class _SweepJob:
+    """What a worker needs to check one object of a sweep (not the record: its images stay behind)."""
+
+    object_id: str
+    category: str | None
+    program: str | None
+    target: str
+    scale: float
+    mounted: bool
+    threads: int
+    out: Path  # the report folder: the object's plot goes to out/plots/<object>.png
+
+
+def _check_job(job: _SweepJob) -> dict[str, Any]:
+    """One object's verdict and its plot of penetration against joint values, or why it was skipped:
+    a record whose program or structure is unusable is reported with the error, and the sweep goes on."""
+    from eval.physics.report import plot_penetration
+    from eval.physics.verdict import check_object_with_curves
+    from jax3dc.errors import Jax3dcError
+    from jax3dc.program import run_program
+    from jax3dc.structure import parse_structure
+
+    if not job.program:
+        return {"object": job.object_id, "why": "no part program in the record"}
+    try:
+        parts = run_program(job.program).parts
+        structure = parse_structure(job.target, part_ids=parts.keys())
+    except Jax3dcError as error:
+        return {"object": job.object_id, "why": f"{type(error).__name__}: {error}"}
+    verdict, curves = check_object_with_curves(structure, parts, job.scale, mounted=job.mounted, threads=job.threads)
+    plot = None
+    if curves:
+        plot = f"plots/{job.object_id}.png"
+        plot_penetration(job.object_id, curves, job.out / plot)
+    return {"object": job.object_id, "category": job.category, "verdict": verdict, "plot": plot}

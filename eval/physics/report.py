@@ -1,4 +1,8 @@
-"""The report folder of ``jax3dc physics sweep``: verdict lines, a summary, plots and an index."""
+"""The report folder of ``jax3dc physics sweep``: verdict lines, a summary, plots and an index.
+
+Each object's plot is drawn where it was checked (``plot_penetration``, in the sweep's worker
+processes); ``write_report`` then writes the lines, the summary and the index that links the plots.
+"""
 
 from __future__ import annotations
 
@@ -10,14 +14,34 @@ from typing import Any
 from jax3dc.errors import InputFileError
 
 
-def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], out: Path) -> dict[str, Any]:
-    """Write verdicts.jsonl, summary.json, plots/<object>.png and index.md; return the summary."""
+def plot_penetration(object_id: str, curves: dict[int, Any], path: Path) -> None:
+    """Deepest penetration (nu) against each joint's value, one line per jointed part."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    fig, ax = plt.subplots(figsize=(5, 3))
+    for part, (q, depth) in curves.items():
+        ax.plot(q, depth, marker=".", label=f"joint of part {part}")
+    ax.set_xlabel("joint value (rad or nu)")
+    ax.set_ylabel("deepest penetration (nu)")
+    ax.set_title(object_id)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
     try:
-        (out / "plots").mkdir(parents=True, exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=80)
+    except OSError as e:
+        raise InputFileError(path, f"cannot write the plot: {e.strerror or e}") from None
+    finally:
+        plt.close(fig)
+
+
+def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], out: Path) -> dict[str, Any]:
+    """Write verdicts.jsonl, summary.json and index.md (linking each result's "plot", a path
+    relative to ``out``, where it has one); return the summary."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
         joints = [j for r in results for j in r["verdict"]["joints"].values()]
         reasons = Counter(reason.split(" at q=")[0].split(" (")[0] for j in joints for reason in j["reasons"])
         summary = {
@@ -37,18 +61,8 @@ def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], o
         for r in results:
             for part, j in r["verdict"]["joints"].items():
                 lines.append(f"| {r['object']} | {part} | {'yes' if j['ok'] else 'no'} | {'; '.join(j['reasons'])} |")
-            if r["curves"]:
-                fig, ax = plt.subplots(figsize=(5, 3))
-                for part, (q, depth) in r["curves"].items():
-                    ax.plot(q, depth, marker=".", label=f"joint of part {part}")
-                ax.set_xlabel("joint value (rad or nu)")
-                ax.set_ylabel("deepest penetration (nu)")
-                ax.set_title(r["object"])
-                ax.legend(fontsize=7)
-                fig.tight_layout()
-                fig.savefig(out / "plots" / f"{r['object']}.png", dpi=80)
-                plt.close(fig)
-                lines.append(f"\n![{r['object']}](plots/{r['object']}.png)\n")
+            if r.get("plot"):
+                lines.append(f"\n![{r['object']}]({r['plot']})\n")
         (out / "index.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
     except OSError as e:
         raise InputFileError(out, f"cannot write the report: {e.strerror or e}") from None

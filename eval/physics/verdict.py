@@ -15,6 +15,7 @@ part it runs in, see ``guides``), "pivot detached", "limit unreachable: lo|hi", 
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -45,9 +46,12 @@ def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
 
 
 def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
-                             backend: str = "c", dynamics: bool = True,
-                             mounted: bool = False) -> tuple[dict[str, Any], dict[int, Any]]:
-    """``check_object`` and, per jointed part, (joint values, deepest penetration in nu) over its sweep."""
+                             backend: str = "c", dynamics: bool = True, mounted: bool = False,
+                             threads: int | None = None) -> tuple[dict[str, Any], dict[int, Any]]:
+    """``check_object`` and, per jointed part, (joint values, deepest penetration in nu) over its sweep.
+
+    ``threads``: C rollout threads (default: every core; fewer when objects run in parallel processes).
+    """
     with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
         kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale))
     states = check_states(kinematic)
@@ -63,7 +67,7 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
             from eval.physics.mjx_dynamics import mjx_final_qpos
             rollout = mjx_final_qpos
         else:
-            rollout = cpu_backend.final_qpos
+            rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
         exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
         extra = reachability(structure, parts, scale, exclude, kinematic.pieces, rollout)
         problems, sag = gravity(structure, parts, scale, kinematic.pieces, rollout, mounted)

@@ -83,11 +83,13 @@ def test_mjx_and_c_give_the_same_penetration_verdicts():
     np.testing.assert_allclose(g[both], c[both], atol=2e-3 * 0.5 + 0.01 * np.abs(c[both]).max())
 
 
-def test_cli_sweep_writes_report(tmp_path):
+def _sweep_build(tmp_path):
+    """A data build of two factory objects, an import without a program, and two unusable records."""
     from data_pipeline.factories import generate_object
     from data_pipeline.record import Record
     from data_pipeline.shards import save_manifest, write_shard
 
+    tmp_path.mkdir()
     records = []
     for category in ("microwave", "laptop"):
         obj = generate_object(category, 0)
@@ -97,13 +99,32 @@ def test_cli_sweep_writes_report(tmp_path):
                               obj.program_text, meta))
     records.append(Record("imported/x/0", b"", b"", "", records[0].target, None,
                           {"object_id": "imported_x", "view": 0}))
+    records.append(Record("bad/program/0", b"", b"", "", records[0].target, "part(1, box((1, 1, 1))\n",
+                          {"object_id": "bad_program", "view": 0}))
+    records.append(Record("bad/target/0", b"", b"", "", records[0].target[:-2], records[0].program,
+                          {"object_id": "bad_target", "view": 0}))
     count, digest = write_shard(tmp_path / "train-00000.array_record", records)
     save_manifest(tmp_path, {"shards": {"train-00000.array_record": {"records": count, "sha256": digest}}})
+    return tmp_path
+
+
+def test_cli_sweep_writes_report(tmp_path):
+    build = _sweep_build(tmp_path / "build")
     out = tmp_path / "report"
-    assert main(["physics", "sweep", str(tmp_path), "--out", str(out)]) == 0
+    assert main(["physics", "sweep", str(build), "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["objects"] == 2 and summary["skipped"] == 1 and summary["joints"] >= 2
-    lines = [json.loads(line) for line in (out / "verdicts.jsonl").read_text().splitlines()]
-    assert {line["object"] for line in lines} == {"microwave_000000", "laptop_000000", "imported_x"}
+    assert summary["objects"] == 2 and summary["skipped"] == 3 and summary["joints"] >= 2
+    lines = {line["object"]: line for line in map(json.loads, (out / "verdicts.jsonl").read_text().splitlines())}
+    assert set(lines) == {"microwave_000000", "laptop_000000", "imported_x", "bad_program", "bad_target"}
+    # an unusable record is reported with the error and where it is, and the sweep goes on
+    assert lines["bad_program"]["skipped"].startswith("ProgramError: line 1")
+    assert lines["bad_target"]["skipped"].startswith("StructureError: line ")
     assert (out / "plots" / "microwave_000000.png").stat().st_size > 0
     assert "| microwave_000000 |" in (out / "index.md").read_text()
+    # objects checked in two worker processes: the same report
+    parallel = tmp_path / "parallel"
+    assert main(["physics", "sweep", str(build), "--out", str(parallel), "--workers", "2"]) == 0
+    assert (parallel / "verdicts.jsonl").read_text() == (out / "verdicts.jsonl").read_text()
+    with pytest.raises(SystemExit) as exit_:
+        main(["physics", "sweep", str(build), "--out", str(parallel), "--workers", "0"])
+    assert exit_.value.code == 2
