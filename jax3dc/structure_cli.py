@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from jax3dc.cli import positive_int
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.structure import MAX_DOCUMENT_BYTES, canonicalize, load_boxes, parse_structure, to_json, validate
 
@@ -37,16 +38,6 @@ def _part_id_list(text: str) -> list[int]:
     if not ids:
         raise argparse.ArgumentTypeError("expected at least one part id")
     return ids
-
-
-def _positive(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive number of parts, got {text!r}")
-    return n
 
 
 def run_validate(args: argparse.Namespace) -> int:
@@ -90,7 +81,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument("file", metavar="FILE.json", help="the structure document")
     ids = p.add_mutually_exclusive_group()
-    ids.add_argument("--parts", type=_positive, metavar="N",
+    ids.add_argument("--parts", type=positive_int, metavar="N",
                      help="the segmentation has parts 1..N: node ids must be exactly these")
     ids.add_argument("--part-ids", type=_part_id_list, metavar="1,2,3",
                      help="the part ids of the segmentation (comma-separated): node ids must be exactly these")
