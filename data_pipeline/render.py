@@ -12,11 +12,13 @@ The OpenGL backend is chosen by :func:`jax3dc.gl.configure_gl` before mujoco is 
 from __future__ import annotations
 
 import io
+import os
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 
+from jax3dc.errors import SetupError
 from jax3dc.gl import configure_gl
 from jax3dc.materials import MATERIALS
 from jax3dc.palette import BACKGROUND_RGB, part_colour
@@ -107,6 +109,19 @@ def scene_xml(parts: dict[int, trimesh.Trimesh], rgba: dict[int, tuple[float, ..
             f'{"".join(bodies)}</worldbody></mujoco>')
 
 
+def offscreen_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer:
+    """``mujoco.Renderer``, or a SetupError that names the OpenGL backend tried and what to install
+    (MuJoCo's own message for a missing context speaks of mjr_makeContext, not of the machine)."""
+    try:
+        return mujoco.Renderer(model, height, width)
+    except (mujoco.FatalError, RuntimeError, ImportError) as error:
+        backend = os.environ.get("MUJOCO_GL", "glfw (MuJoCo's default; MUJOCO_GL unset)")
+        raise SetupError(
+            f"cannot render: no OpenGL context with MUJOCO_GL={backend} ({error}). Without a display, install "
+            "Mesa's EGL or OSMesa (bash scripts/setup.sh installs libegl1 libegl-mesa0 libosmesa6 libgl1-mesa-dri) or set MUJOCO_GL "
+            "to a backend this machine has") from None
+
+
 class PartRenderer:
     """One compiled scene of parts and its renderer; render any pose of the parts from any camera."""
 
@@ -121,7 +136,7 @@ class PartRenderer:
             self.part_of_geom[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"g{pid}")] = pid
             body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, f"p{pid}")
             self.mocap_of_part[pid] = int(self.model.body_mocapid[body])
-        self.renderer = mujoco.Renderer(self.model, size, size)
+        self.renderer = offscreen_renderer(self.model, size, size)
 
     def close(self) -> None:
         self.renderer.close()

@@ -40,3 +40,8 @@ class ProgramError(Jax3dcError):
         self.line = line
         self.message = message
         super().__init__(f"line {line}: {message}" if line is not None else message)
+
+
+class SetupError(Jax3dcError):
+    """The machine lacks something a command needs (a system library, an OpenGL context); the
+    message says what to install or set."""

@@ -21,7 +21,7 @@ from typing import Any, Mapping
 import numpy as np
 import trimesh
 
-from data_pipeline.render import Camera, Lighting, PartRenderer, paint_segmentation
+from data_pipeline.render import Camera, Lighting, PartRenderer, offscreen_renderer, paint_segmentation
 from jax3dc.errors import InputFileError
 from jax3dc.geometry.parts import parts_bounds
 
@@ -85,8 +85,6 @@ def render_part_ids(parts: Mapping[int, trimesh.Trimesh], camera: Camera, size: 
                     height: int | None = None) -> np.ndarray:
     """Part id per pixel [height, size] (0 = background; height defaults to size) of the parts at
     rest seen from ``camera``."""
-    import mujoco  # after data_pipeline.render has chosen the GL backend
-
     height = size if height is None else height
     grey = {pid: (0.7, 0.7, 0.7, 1.0) for pid in parts}
     renderer = PartRenderer(dict(parts), grey, _FLAT, max(size, height))
@@ -95,7 +93,7 @@ def render_part_ids(parts: Mapping[int, trimesh.Trimesh], camera: Camera, size: 
             # PartRenderer draws squares; its offscreen buffer (the longer side) also holds a
             # size x height view, which MuJoCo draws with the same vertical field of view.
             renderer.renderer.close()
-            renderer.renderer = mujoco.Renderer(renderer.model, height, size)
+            renderer.renderer = offscreen_renderer(renderer.model, height, size)
         return renderer.render({}, camera)[1]
     finally:
         renderer.close()

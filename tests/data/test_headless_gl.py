@@ -31,3 +31,16 @@ def test_headless_backend_is_one_the_machine_has(monkeypatch):
         assert os.environ.get("MUJOCO_GL") == expected
     monkeypatch.setenv("MUJOCO_GL", "glfw")  # the caller's choice is kept
     assert gl.configure_gl() == "glfw"
+
+
+def test_rendering_without_an_opengl_context_says_what_to_install(tmp_path):
+    """GLFW without a display cannot make a context: one line naming the backend and the fix,
+    exit 1, no traceback (MuJoCo's own message speaks of mjr_makeContext)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYOPENGL_PLATFORM", "DISPLAY")}
+    env["MUJOCO_GL"] = "glfw"
+    r = subprocess.run([sys.executable, "-m", "jax3dc.cli", "data", "build", "--out", str(tmp_path / "data"),
+                        "--objects", "1", "--views", "1", "--size", "32", "--quiet"],
+                       env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 1
+    assert "cannot render: no OpenGL context with MUJOCO_GL=glfw" in r.stderr and "scripts/setup.sh" in r.stderr
+    assert "Traceback" not in r.stderr
