@@ -6,7 +6,9 @@ from __future__ import annotations
 class Jax3dcError(Exception):
     """Base of every error a user can cause with bad input.
 
-    The CLI prints ``str(error)`` on one line and exits 1.
+    The CLI prints ``str(error)`` on one line and exits 1. Subclasses whose constructor takes other
+    arguments than the message say how to rebuild them (``__reduce__``), so an error raised in a
+    worker process (data build, physics sweep) reaches the parent intact instead of breaking the pool.
     """
 
 
@@ -23,6 +25,9 @@ class StructureError(Jax3dcError):
         self.message = message
         super().__init__(f"{where}: {message} [{rule}]" if where else f"{message} [{rule}]")
 
+    def __reduce__(self):
+        return type(self), (self.rule, self.where, self.message)
+
 
 class InputFileError(Jax3dcError):
     """A file given to us is missing, unreadable or malformed (mesh, PNG, URDF, boxes...)."""
@@ -32,6 +37,9 @@ class InputFileError(Jax3dcError):
         self.message = message
         super().__init__(f"{path}: {message}")
 
+    def __reduce__(self):
+        return type(self), (self.path, self.message)
+
 
 class ProgramError(Jax3dcError):
     """A part program is rejected or fails; ``line`` is 1-based in the program text."""
@@ -40,6 +48,9 @@ class ProgramError(Jax3dcError):
         self.line = line
         self.message = message
         super().__init__(f"line {line}: {message}" if line is not None else message)
+
+    def __reduce__(self):
+        return type(self), (self.line, self.message)
 
 
 class SetupError(Jax3dcError):

@@ -128,3 +128,14 @@ def test_cli_sweep_writes_report(tmp_path):
     with pytest.raises(SystemExit) as exit_:
         main(["physics", "sweep", str(build), "--out", str(parallel), "--workers", "0"])
     assert exit_.value.code == 2
+
+
+def test_cli_sweep_worker_error_is_one_line(tmp_path, capsys):
+    """A plot that cannot be written in a worker process ends the sweep with the error naming the
+    file (exit 1), as in one process, not with a broken process pool."""
+    build = _sweep_build(tmp_path / "build")
+    out = tmp_path / "report"
+    out.mkdir()
+    (out / "plots").write_text("a file where the plots folder goes")
+    assert main(["physics", "sweep", str(build), "--out", str(out), "--workers", "2"]) == 1
+    assert "plots/microwave_000000.png: cannot write the plot" in capsys.readouterr().err
