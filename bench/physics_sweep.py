@@ -29,7 +29,7 @@ def write_build(directory: Path, objects: int) -> None:
     """A one-shard data build of ``objects`` factory objects, one rest-pose record each."""
     from data_pipeline.factories import FACTORIES, generate_object
     from data_pipeline.record import Record
-    from data_pipeline.shards import save_manifest, write_shard
+    from data_pipeline.shards import write_dataset
     from jax3dc.structure import to_json
 
     categories = sorted(FACTORIES)
@@ -41,9 +41,7 @@ def write_build(directory: Path, objects: int) -> None:
                 "moved_joint": None, "augmentation": None}
         records.append(Record(f"{category}/{obj.object_id}/0", b"", b"", "", to_json(obj.structure),
                               obj.program_text, meta))
-    directory.mkdir(parents=True, exist_ok=True)
-    count, digest = write_shard(directory / "train-00000.array_record", records)
-    save_manifest(directory, {"shards": {"train-00000.array_record": {"records": count, "sha256": digest}}})
+    write_dataset(directory, records)
 
 
 def main() -> None:

@@ -47,6 +47,14 @@ def write_shard(path: Path, records: Iterable[Record]) -> tuple[int, str]:
     return count, file_sha256(path)
 
 
+def write_dataset(directory: Path, records: Iterable[Record], name: str = "train-00000" + SHARD_SUFFIX) -> None:
+    """One shard and its manifest, readable as ``jax3dc data build``'s output is, for records made
+    elsewhere (benchmarks, tests): the manifest's layout stays known to this module alone."""
+    directory.mkdir(parents=True, exist_ok=True)
+    count, sha = write_shard(directory / name, records)
+    save_manifest(directory, {"shards": {name: {"records": count, "sha256": sha}}})
+
+
 def read_shard(path: Path) -> Iterator[Record]:
     """Every record of one shard, decoded (a corrupt record raises CorruptRecordError)."""
     reader = ArrayRecordReader(str(path))

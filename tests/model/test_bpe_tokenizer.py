@@ -17,7 +17,7 @@ from transformers import AutoTokenizer
 
 from data_pipeline.factories import generate_object
 from data_pipeline.record import Record
-from data_pipeline.shards import save_manifest, write_shard
+from data_pipeline.shards import write_dataset
 from jax3dc.cli import main as cli_main
 from jax3dc.errors import InputFileError
 from jax3dc.geometry.parts import part_boxes
@@ -209,19 +209,13 @@ def test_transformers_loads_the_same_tokenizer(bpe, samples, tmp_path) -> None:
     assert hf_ids == ours.input_ids.tolist()
 
 
-def _write_dataset(directory: Path, records: list[Record]) -> None:
-    directory.mkdir()
-    count, sha = write_shard(directory / "train-00000.array_record", records)
-    save_manifest(directory, {"shards": {"train-00000.array_record": {"records": count, "sha256": sha}}})
-
-
 def test_cli_trains_on_the_train_split(samples, tmp_path) -> None:
     records = [Record(key=f"o/{i}/0", image_png=b"", seg_png=b"", prompt=p, target=t, program=g,
                       meta={"split": "train"}) for i, (p, t, g) in enumerate(samples[:4])]
     secret = " zyzzyvaquux" * 5  # only in a val record: must not be learned from the train split
     records.append(Record(key="o/9/0", image_png=b"", seg_png=b"", prompt=samples[4][0] + secret,
                           target=samples[4][1], meta={"split": "val"}))
-    _write_dataset(tmp_path / "data", records)
+    write_dataset(tmp_path / "data", records)
     for split in ("train", "all"):
         out = tmp_path / split
         argv = ["data", "tokenizer", "--data", str(tmp_path / "data"), "--vocab-size", "2048", "--out", str(out),

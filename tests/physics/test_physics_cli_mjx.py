@@ -87,7 +87,7 @@ def _sweep_build(tmp_path):
     """A data build of two factory objects, an import without a program, and two unusable records."""
     from data_pipeline.factories import generate_object
     from data_pipeline.record import Record
-    from data_pipeline.shards import save_manifest, write_shard
+    from data_pipeline.shards import write_dataset
 
     tmp_path.mkdir()
     records = []
@@ -103,8 +103,7 @@ def _sweep_build(tmp_path):
                           {"object_id": "bad_program", "view": 0}))
     records.append(Record("bad/target/0", b"", b"", "", records[0].target[:-2], records[0].program,
                           {"object_id": "bad_target", "view": 0}))
-    count, digest = write_shard(tmp_path / "train-00000.array_record", records)
-    save_manifest(tmp_path, {"shards": {"train-00000.array_record": {"records": count, "sha256": digest}}})
+    write_dataset(tmp_path, records)
     return tmp_path
 
 
