@@ -89,7 +89,6 @@ def _sweep_build(tmp_path):
     from data_pipeline.record import Record
     from data_pipeline.shards import write_dataset
 
-    tmp_path.mkdir()
     records = []
     for category in ("microwave", "laptop"):
         obj = generate_object(category, 0)
