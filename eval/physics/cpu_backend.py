@@ -83,7 +83,8 @@ class PairDistancePool:
         import multiprocessing as mp
 
         self.workers = workers or os.cpu_count() or 1
-        self._pool = mp.get_context("fork").Pool(self.workers, initializer=_init_worker, initargs=(xml, assets))
+        # spawned: a forked child would inherit the parent's JAX threads and their locks
+        self._pool = mp.get_context("spawn").Pool(self.workers, initializer=_init_worker, initargs=(xml, assets))
 
     def start(self, qpos: np.ndarray) -> None:
         """Runs one state per worker so that every process has built its model."""
