@@ -42,8 +42,9 @@ def _split_concave(mesh: trimesh.Trimesh, depth: int, excess: float) -> list[tri
     """A clearly concave component (its hull exceeds its voxelised volume by more than ``excess``)
     becomes the surface points inside each box of a greedy box cover of its voxels; others stay
     whole. Closed meshes are voxelised solid, open ones (triangle soups) by their surface."""
-    try:
-        hull_volume = mesh.convex_hull.volume
+    try:  # trimesh divides by a flat hull's zero volume on the way
+        with np.errstate(invalid="ignore", divide="ignore"):
+            hull_volume = mesh.convex_hull.volume
     except Exception:  # qhull: flat point set
         return [mesh]
     extent = float(np.max(mesh.extents))

@@ -225,8 +225,9 @@ def _thin_frame(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | No
     a board (see BOARD_MAX_THICKNESS_NU, MIN_BOARD_NU); None otherwise."""
     if len(v) < 4:
         return None
-    try:
-        transform, extents = trimesh.bounds.oriented_bounds(v)
+    try:  # trimesh divides by the zero volume of a flat component's hull on the way
+        with np.errstate(invalid="ignore", divide="ignore"):
+            transform, extents = trimesh.bounds.oriented_bounds(v)
     except Exception:  # qhull: a flat or degenerate component
         return None
     order = np.argsort(extents)

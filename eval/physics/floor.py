@@ -45,6 +45,7 @@ def _hull_vertices(mesh: trimesh.Trimesh) -> np.ndarray:
     if len(vertices) < 5:
         return vertices
     try:
-        return np.asarray(trimesh.convex.convex_hull(vertices).vertices, dtype=np.float64)
+        # repair=False: only the vertices are wanted, and repair divides by a flat hull's zero volume
+        return np.asarray(trimesh.convex.convex_hull(vertices, repair=False).vertices, dtype=np.float64)
     except Exception:  # qhull: a flat or degenerate part; every vertex then
         return vertices

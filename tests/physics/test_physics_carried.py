@@ -2,14 +2,10 @@
 
 from __future__ import annotations
 
-import warnings
-
 from data_pipeline.factories import generate_object
 from eval.physics.ground_truth import changes_motion
 from eval.physics.mutations import mutations_of
 from eval.physics.verdict import check_object
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def test_rack_hung_on_the_dishwasher_door_is_swung_through_the_tub():

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import warnings
 
 import numpy as np
 import pytest
@@ -12,8 +11,6 @@ import trimesh
 from jax3dc.cli import main
 from jax3dc.geometry.parts import save_parts
 from jax3dc.structure import parse_structure, to_json
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def _box(extents, centre):

@@ -3,8 +3,6 @@ loop over worker processes, and threaded rollout with a signed-distance sensor p
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 
@@ -12,8 +10,6 @@ from data_pipeline.factories import generate_object
 from eval.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
 from eval.physics.sim_model import SimOptions, build_sim_model
 from eval.physics.tolerances import PENETRATION_TOL_NU
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import warnings
 
 import numpy as np
 import pytest
@@ -16,8 +15,6 @@ from eval.physics.floor import first_below_floor
 from eval.physics.kinematics import joint_motion
 from eval.physics.verdict import _pivot_attached, check_object
 from jax3dc.structure.schema import Structure
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def _pose(structure: Structure, parts, part: int, values: dict[int, float]) -> np.ndarray:

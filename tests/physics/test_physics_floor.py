@@ -8,15 +8,14 @@ import warnings
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial import ConvexHull
 
 from data_pipeline.factories import generate_object
-from eval.physics.floor import first_below_floor
+from eval.physics.floor import _hull_vertices, first_below_floor
 from eval.physics.mutations import mutations_of
 from eval.physics.tolerances import FLOOR_TOL_NU
 from eval.physics.verdict import check_object
 from jax3dc.structure.schema import Joint, Node, Structure
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def _flap(range_, axis=(-1.0, 0.0, 0.0)):
@@ -69,3 +68,17 @@ def test_subtree_the_object_stands_on_is_not_checked():
     assert first_below_floor(structure, parts, 2, np.linspace(0.0, 2.5, 26)) is None
     parts[2].apply_translation([0.0, 0.0, FLOOR_TOL_NU])  # lifted clear of the floor: checked again
     assert first_below_floor(structure, parts, 2, np.linspace(0.0, 2.5, 26)) is not None
+
+
+def test_flat_part_keeps_its_outline_without_numpy_warnings():
+    """A flat part (a predicted door as one sheet) has a zero-volume hull: its candidate lowest
+    points are still every corner of its outline (scipy's 2-D hull), and nothing is printed."""
+    rng = np.random.default_rng(0)
+    sheet = np.c_[rng.uniform(-0.5, 0.5, (30, 2)), np.full(30, 0.2)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kept = _hull_vertices(trimesh.Trimesh(vertices=sheet))
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    kept_rows = {tuple(row) for row in kept}
+    assert {tuple(row) for row in sheet[ConvexHull(sheet[:, :2]).vertices]} <= kept_rows
+    assert kept_rows <= {tuple(row) for row in sheet}

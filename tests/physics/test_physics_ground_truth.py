@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import warnings
 
 import numpy as np
 import pytest
@@ -18,8 +17,6 @@ from eval.physics.mutations import mutations_of
 from eval.physics.verdict import check_object
 from jax3dc.structure.schema import Joint
 from tests.shared_fixtures import partnet_object
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def _mutation(obj, kind, part):

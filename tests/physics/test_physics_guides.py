@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import warnings
 
 import numpy as np
 import pytest
@@ -12,8 +11,6 @@ from data_pipeline.factories import generate_object
 from eval.physics.guides import carried_out_of_guide
 from eval.physics.tolerances import SLIDE_GUIDE_OVERLAP_NU
 from eval.physics.verdict import check_object
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 @pytest.fixture(scope="module")

@@ -4,8 +4,6 @@ the same joint states, and itself without the broad phase."""
 
 from __future__ import annotations
 
-import warnings
-
 import jax
 import jax.numpy as jnp
 import mujoco
@@ -16,8 +14,6 @@ from scipy.spatial.transform import Rotation
 
 from eval.physics import mjx_backend
 from eval.physics.mjx_backend import CHUNK_ITEMS, PairDistances, capacity_for, penetration_depth
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def _brute_force_depth(a: np.ndarray, b: np.ndarray) -> float:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import re
-import warnings
 
 import numpy as np
 
@@ -14,8 +13,6 @@ from eval.physics.sim_model import SimOptions, build_sim_model
 from eval.physics.verdict import check_object
 from jax3dc.structure import parse_structure, to_json
 from tests.physics.test_physics_cli_mjx import _box, _lid_box
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def _overhang():

@@ -5,7 +5,6 @@ that stays is caught (and blamed on that part's joint)."""
 from __future__ import annotations
 
 import dataclasses
-import warnings
 
 import numpy as np
 import trimesh
@@ -18,8 +17,6 @@ from eval.physics.mutations import mutations_of
 from eval.physics.tolerances import CROSSING_MARGIN_NU
 from eval.physics.verdict import check_object
 from tests.shared_fixtures import partnet_object
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def test_bucket_handle_swung_the_wrong_way_passes_through_the_bucket_wall():

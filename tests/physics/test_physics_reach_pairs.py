@@ -5,7 +5,6 @@ part pairs in contact, with far fewer pairs for MJX to compile."""
 from __future__ import annotations
 
 import dataclasses
-import warnings
 
 import mujoco
 import numpy as np
@@ -19,8 +18,6 @@ from eval.physics.sim_model import SimOptions, build_sim_model
 from eval.physics.states import check_states
 from eval.physics.tolerances import DETACH_TOL_NU, PENETRATION_TOL_NU, RECONTACT_DEPTH_NU
 from tests.shared_fixtures import partnet_object
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def _objects():

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import warnings
 
 import numpy as np
 import pytest
@@ -17,8 +16,6 @@ from eval.physics.tolerances import DETACH_TOL_NU, PENETRATION_TOL_NU, RECONTACT
 from eval.physics.ground_truth import imported_objects
 from eval.physics.verdict import check_object
 from tests.shared_fixtures import partnet_object
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 @pytest.fixture(scope="module")

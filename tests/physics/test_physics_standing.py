@@ -4,7 +4,6 @@ mounted in use are checked with their root held, and one that falls over is stil
 from __future__ import annotations
 
 import json
-import warnings
 
 import numpy as np
 import pytest
@@ -13,8 +12,6 @@ from data_pipeline.factories import FACTORIES, generate_object
 from eval.physics.dynamics import gravity
 from eval.physics.ground_truth import factory_objects
 from eval.physics.tolerances import GRAVITY_TILT_RAD
-
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
 def test_free_standing_faucet_falls_over_but_passes_mounted():
@@ -56,7 +53,6 @@ def test_kitchen_unit_stands_on_feet_not_on_its_plinth():
     centre = np.mean([m.center_mass for m in obj.parts.values()], axis=0)
     xy = np.array([m.bounds.mean(axis=0)[:2] for m in feet])
     assert np.all(xy.min(axis=0) < centre[:2]) and np.all(centre[:2] < xy.max(axis=0)), json.dumps(xy.tolist())
-
 
 
 def test_cli_mounted_flag_holds_the_root(tmp_path, capsys):

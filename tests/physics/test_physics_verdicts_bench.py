@@ -7,13 +7,11 @@ import importlib.util
 import json
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 from data_pipeline.factories import FACTORIES, generate_object
 from eval.physics.verdict import check_object
 
-warnings.filterwarnings("ignore", category=RuntimeWarning)
 BENCH = Path(__file__).resolve().parents[2] / "bench"
 
 
