@@ -87,9 +87,9 @@ class PairDistancePool:
         self._pool = mp.get_context("spawn").Pool(self.workers, initializer=_init_worker, initargs=(xml, assets))
 
     def start(self, qpos: np.ndarray) -> None:
-        """Runs the states through the pool once: every process builds its model and warms up
-        (a spawned process starts cold, and its first full chunks ran a third slower)."""
-        self._pool.map(_worker_chunk, [qpos[:1]] * self.workers, chunksize=1)
+        """Runs the states through the pool once, so that ``map`` is timed warm: each process
+        builds its model in the initializer, but a spawned one starts cold, and its first full
+        chunks ran a third slower."""
         self.map(qpos)
 
     def map(self, qpos: np.ndarray) -> np.ndarray:
