@@ -144,6 +144,21 @@ class Qwen3VLConfig:
             tie_word_embeddings=True)
 
     @classmethod
+    def release(cls, vocab_size: int = 2048) -> Qwen3VLConfig:
+        """The shipped default model: about 12 M parameters with a 2k BPE, so its bf16 weights
+        stay under the 24 MiB the package may carry (SPEC §7). One KV head and a thin vision
+        tower: the legend already gives every part's box, so the image mostly has to tell
+        which part is which."""
+        return cls(
+            vision=VisionConfig(depth=4, hidden_size=192, intermediate_size=768, num_heads=3,
+                                out_hidden_size=320, num_position_embeddings=256,
+                                deepstack_visual_indexes=(1, 3)),
+            text=TextConfig(vocab_size=vocab_size, hidden_size=320, intermediate_size=960,
+                            num_hidden_layers=6, num_attention_heads=5, num_key_value_heads=1,
+                            head_dim=64, mrope_section=(12, 10, 10)),
+            tie_word_embeddings=True)
+
+    @classmethod
     def tiny(cls, vocab_size: int = 128, tie_word_embeddings: bool = False) -> Qwen3VLConfig:
         """A few thousand parameters for tests. Special tokens sit inside the small vocabulary."""
         return cls(

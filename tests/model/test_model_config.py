@@ -9,7 +9,7 @@ from jax3dc.errors import InputFileError
 from jax3dc.model.config import Qwen3VLConfig, VisionConfig
 from jax3dc.model.params import abstract_model, param_count
 
-PRESETS = ["qwen3_vl_2b", "qwen3_vl_4b", "qwen3_vl_8b", "small", "tiny"]
+PRESETS = ["qwen3_vl_2b", "qwen3_vl_4b", "qwen3_vl_8b", "small", "release", "tiny"]
 
 
 def hf_kwargs(cfg: Qwen3VLConfig) -> dict:
@@ -86,3 +86,9 @@ def test_4b_parameter_count_without_allocating():
 def test_small_preset_is_sized_for_training_from_scratch():
     n = param_count(abstract_model(Qwen3VLConfig.small()))
     assert 50e6 <= n <= 150e6
+
+
+def test_release_preset_fits_the_package_weight_budget():
+    """bf16 weights of the shipped model (2k BPE vocabulary) must stay under 24 MiB."""
+    n = param_count(abstract_model(Qwen3VLConfig.release()))
+    assert 2 * n <= 24 * 2**20, n

@@ -1,0 +1,185 @@
+"""The release recipe: data, tokenizer, training, evaluation and the packaged default model.
+
+Run on a GPU host (one GPU or all GPUs of one host), one command that may be repeated:
+    python3 -m bench.release_model --out runs/release --budget-min 9.3 [--real SHARDS] [--fixtures SHARDS]
+Each call does what is left, in order, and stops before --budget-min minutes have passed, so
+a host whose commands are cut at 10 minutes still gets there in a few calls (training resumes
+from its orbax checkpoint in OUT/train):
+  1. data      `jax3dc data build`: factory objects (all categories), scenes, several views with
+               one joint moved each, split/merge augmentation; split by object
+  2. tokenizer `jax3dc data tokenizer`: a byte-level BPE of the training texts (the model's
+               vocabulary, and so its embedding table, stays small enough to ship)
+  3. train     `jax3dc train --init release` from scratch, every parameter trained, the
+               procedural build mixed with --real (imported real objects, train split only)
+  4. evaluate  `jax3dc eval run` on the procedural test split and on --fixtures (real objects
+               kept out of training), `jax3dc eval baselines` on the same references
+  5. package   the weights in bf16, sharded below 16 MiB a file, with the tokenizer, processor
+               config and a model card, in OUT/release (what `jax3dc/release/` ships)
+`--init DIR` continues from an earlier release folder instead of random weights (new optimiser).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import time
+from pathlib import Path
+
+from jax3dc.cli import main as jax3dc
+
+COLUMNS = ("parse", "parent_acc", "edge_f1", "presence_f1", "type_acc", "axis_acc", "pos_err", "range_iou",
+           "success", "sym_f1", "inst_f1", "fail_type", "fail_axis", "fail_origin", "fail_limit")
+SHARD_BYTES = 12 * 2**20  # files coming back from a device host must stay under 16 MiB each
+
+
+def _call(argv: list[str]) -> None:
+    print(f"[release] jax3dc {' '.join(argv)}", flush=True)
+    code = jax3dc(argv)
+    if code != 0:
+        raise SystemExit(f"`jax3dc {' '.join(argv)}` failed with exit code {code}")
+
+
+def _sets(overrides: list[str]) -> list[str]:
+    return [x for o in overrides for x in ("--set", o)]
+
+
+def _last_step(train_dir: Path) -> int:
+    log = train_dir / "metrics.jsonl"
+    if not log.exists():
+        return 0
+    steps = [json.loads(line).get("step", 0) for line in log.read_text().splitlines() if line.strip()]
+    return max(steps, default=0)
+
+
+def _row(metrics: dict) -> dict:
+    return {k: metrics.get(k) for k in COLUMNS}
+
+
+def _table(rows: dict[str, dict]) -> str:
+    lines = ["| system | " + " | ".join(COLUMNS) + " |", "|---" * (len(COLUMNS) + 1) + "|"]
+    for name, row in rows.items():
+        cells = ["-" if row.get(k) is None else (f"{row[k]:.3f}" if k == "pos_err" else f"{row[k]:.1f}")
+                 for k in COLUMNS]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _evaluate(model: Path, data: list[str], split: str, out: Path, limit: int, batch: int, max_new: int) -> dict:
+    """eval run + baselines on the same references; returns {system: metrics}."""
+    if not (out / "metrics.json").exists():
+        _call(["eval", "run", "--checkpoint", str(model), "--data", *data, "--split", split, "--limit", str(limit),
+               "--batch-size", str(batch), "--bucket", "256", "--max-new-tokens", str(max_new), "--out", str(out),
+               "--overlays", "8"])
+    if not (out / "baselines" / "heuristic" / "metrics.json").exists():
+        _call(["eval", "baselines", "--ref", str(out / "references.jsonl"), "--out", str(out / "baselines")])
+    rows = {"model": json.loads((out / "metrics.json").read_text())}
+    for name in ("star", "heuristic"):
+        rows[name] = json.loads((out / "baselines" / name / "metrics.json").read_text())
+    return rows
+
+
+def _package(train_dir: Path, out: Path) -> None:
+    """bf16 weights, sharded, plus tokenizer and processor files of the run."""
+    import jax.numpy as jnp
+
+    from jax3dc.model.params import load_pretrained, save_pretrained
+
+    hf = train_dir / "hf"
+    model, config = load_pretrained(hf, dtype=jnp.float32)
+    out.mkdir(parents=True, exist_ok=True)
+    save_pretrained(model, config, out, dtype=jnp.bfloat16, max_shard_bytes=SHARD_BYTES)
+    for f in hf.iterdir():
+        if f.suffix != ".safetensors" and f.name not in ("config.json", "model.safetensors.index.json"):
+            shutil.copy2(f, out / f.name)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--out", default="runs/release")
+    p.add_argument("--budget-min", type=float, default=9.3, help="stop this call before this many minutes")
+    p.add_argument("--init", default="release", help="preset, or an earlier release folder to continue from")
+    p.add_argument("--objects", type=int, default=4000)
+    p.add_argument("--scenes", type=int, default=120)
+    p.add_argument("--views", type=int, default=2)
+    p.add_argument("--appearance", default="varied", help="`data build --appearance` (empty: the build's default)")
+    p.add_argument("--image-size", type=int, default=224)
+    p.add_argument("--vocab", type=int, default=2048)
+    p.add_argument("--real", default="", help="shards of imported real training objects (train split)")
+    p.add_argument("--real-weight", type=float, default=0.1, help="share of training examples from --real")
+    p.add_argument("--fixtures", default="", help="shards of real objects never trained on, scored per object")
+    p.add_argument("--steps", type=int, default=6000)
+    p.add_argument("--batch", type=int, default=32)
+    p.add_argument("--seq-len", type=int, default=4096)
+    p.add_argument("--lr", type=float, default=1e-3)
+    p.add_argument("--eval-records", type=int, default=400)
+    p.add_argument("--eval-batch", type=int, default=100)
+    p.add_argument("--max-new-tokens", type=int, default=1536)
+    p.add_argument("--reserve-min", type=float, default=2.5, help="minutes kept for evaluation and packaging")
+    p.add_argument("--set", action="append", default=[], help="extra `jax3dc train --set` overrides")
+    a = p.parse_args()
+    start = time.perf_counter()
+
+    def left() -> float:
+        return a.budget_min - (time.perf_counter() - start) / 60
+
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    data, tok, train_dir = out / "data", out / "tokenizer", out / "train"
+    workers = str(os.cpu_count() or 1)
+
+    manifest = data / "manifest.json"
+    if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
+        t = time.perf_counter()
+        build = ["data", "build", "--out", str(data), "--objects", str(a.objects), "--scenes", str(a.scenes),
+                 "--views", str(a.views), "--augment", "--size", str(a.image_size), "--workers", workers, "--quiet"]
+        _call(build + (["--appearance", a.appearance] if a.appearance else []))
+        print(f"[release] data: {time.perf_counter() - t:.0f} s", flush=True)
+
+    init_dir = Path(a.init) if a.init != "release" else None
+    if init_dir is None and not (tok / "tokenizer.json").exists():
+        sources = [x for d in [str(data), *filter(None, a.real.split(","))] for x in ("--data", d)]
+        _call(["data", "tokenizer", *sources, "--vocab-size", str(a.vocab), "--out", str(tok), "--quiet"])
+
+    done = _last_step(train_dir) >= a.steps and (train_dir / "hf" / "config.json").exists()
+    if not done:
+        minutes = left() - a.reserve_min
+        if minutes < 1:
+            print("[release] no time left for training in this call; run it again", flush=True)
+            return
+        datasets = [str(data)] + ([a.real] if a.real else [])
+        weights = [1 - a.real_weight, a.real_weight] if a.real else []
+        overrides = [f"data={','.join(datasets)}", f"val_data={data}", f"image_size={a.image_size}", f"seq_len={a.seq_len}",
+                     f"batch_size={a.batch}", "grad_accum=1", f"lr={a.lr}", f"warmup_steps={min(200, a.steps // 20)}",
+                     f"steps={a.steps}", f"time_limit_min={minutes:.2f}", "freeze=", f"loader_workers={int(workers) - 2}",
+                     "eval_every=500", "eval_batches=2", "save_every=500", "log_every=50", "keep_last=1",
+                     f"tokenizer={init_dir or tok}", *a.set]
+        if weights:
+            overrides.append("data_weights=" + ",".join(f"{w:g}" for w in weights))
+        _call(["train", "--init", str(init_dir or "release"), "--output-dir", str(train_dir), *_sets(overrides)])
+        if _last_step(train_dir) < a.steps:
+            print(f"[release] trained to step {_last_step(train_dir)} of {a.steps}; run again to go on", flush=True)
+            return
+
+    release = out / "release"
+    if not (release / "config.json").exists():
+        _package(train_dir, release)
+    results = {"procedural": _evaluate(release, [str(data)], "test", out / "eval_procedural", a.eval_records,
+                                       a.eval_batch, a.max_new_tokens)}
+    if a.fixtures:
+        results["real_fixtures"] = _evaluate(release, a.fixtures.split(","), "test", out / "eval_fixtures", 0,
+                                             a.eval_batch, a.max_new_tokens)
+    steps = [json.loads(line) for line in (train_dir / "metrics.jsonl").read_text().splitlines() if line.strip()]
+    train_rows = [r for r in steps if r.get("kind") == "train"]
+    summary = {"args": vars(a), "final_step": _last_step(train_dir), "last_train": train_rows[-1] if train_rows else None,
+               "results": {split: {name: _row(m) for name, m in rows.items()} for split, rows in results.items()},
+               "counts": {split: rows["model"]["counts"] for split, rows in results.items()}}
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    shutil.copy2(out / "summary.json", release / "release_summary.json")
+    for split, rows in results.items():
+        print(f"\n## {split}\n" + _table({k: _row(v) for k, v in rows.items()}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
