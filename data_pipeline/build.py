@@ -1,9 +1,10 @@
 """Plan and run a dataset build: objects → shard tasks (split by object) → shards, in parallel.
 
-The plan depends only on the sources and the seed: objects are assigned to train/val/test by
-SHA-256 of their id, kept in source order within a split, and cut into shards of a fixed
-number of objects. Workers (spawned processes, each with its own GL context) build whole
-shards, so the bytes of a shard never depend on the worker count.
+The plan depends only on the sources and the config: objects are assigned to train/val/test by
+SHA-256 of their id (``split="hash"``) or all to the one split the config names, kept in source
+order within a split, and cut into shards of a fixed number of objects. Workers (spawned
+processes, each with its own GL context) build whole shards, so the bytes of a shard never
+depend on the worker count.
 """
 
 from __future__ import annotations
@@ -49,6 +50,10 @@ class BuildConfig:
     size: int
     objects_per_shard: int
     augment: bool = False  # also one split and one merge variant per object (one view each)
+    split: str = "hash"  # "hash": by SHA-256 of the object id; "train" / "val" / "test": every object there
+
+
+SPLIT_CHOICES = ("hash", "train", "val", "test")
 
 
 def factory_sources(n: int, seed: int) -> list[SourceSpec]:
@@ -72,13 +77,21 @@ def import_sources(paths: list[Path]) -> list[SourceSpec]:
     return [SourceSpec("import", Path(p).resolve().name, path=str(Path(p).resolve())) for p in paths]
 
 
-def plan_shards(sources: list[SourceSpec], objects_per_shard: int) -> list[ShardTask]:
+def plan_shards(sources: list[SourceSpec], objects_per_shard: int, split: str = "hash") -> list[ShardTask]:
+    """Shard tasks per split; ``split`` "hash" assigns each object by its id, a split name puts
+    every object in that split."""
+    if split not in SPLIT_CHOICES:
+        raise ValueError(f"split must be one of {', '.join(SPLIT_CHOICES)}, not {split!r}")
+
+    def split_of_source(s: SourceSpec) -> str:
+        return split_of(s.object_id) if split == "hash" else split
+
     tasks = []
-    for split in ("train", "val", "test"):
-        members = [s for s in sources if split_of(s.object_id) == split]
+    for split_name in ("train", "val", "test"):
+        members = [s for s in sources if split_of_source(s) == split_name]
         for i in range(0, len(members), objects_per_shard):
             chunk = tuple(members[i:i + objects_per_shard])
-            tasks.append(ShardTask(f"{split}-{i // objects_per_shard:05d}{SHARD_SUFFIX}", split, chunk))
+            tasks.append(ShardTask(f"{split_name}-{i // objects_per_shard:05d}{SHARD_SUFFIX}", split_name, chunk))
     return tasks
 
 
@@ -110,13 +123,13 @@ def build_shard(task: ShardTask, out_dir: str, config: BuildConfig) -> tuple[str
         for spec in task.sources:
             objects = load_sources(spec)
             for obj in objects:
-                yield from object_records(obj, config.views, config.seed, config.size)
+                yield from object_records(obj, config.views, config.seed, config.size, split=task.split)
             if config.augment and spec.kind != "scene":
                 obj = objects[0]
                 rng = derived_rng(config.seed, "augment", obj.object_id)
                 for variant in (split_part(obj, rng), merge_parts(obj, rng)):
                     if variant is not None:
-                        yield from object_records(variant, 1, config.seed, config.size)
+                        yield from object_records(variant, 1, config.seed, config.size, split=task.split)
 
     count, sha = write_shard(Path(out_dir) / task.name, records())
     return task.name, count, sha
@@ -126,18 +139,26 @@ def _build_star(args: tuple) -> tuple[str, int, str]:
     return build_shard(*args)
 
 
+def _comparable(manifest: dict, wanted: dict) -> dict:
+    """The manifest's fields of ``wanted``; a config written before ``split`` existed was "hash"."""
+    have = {k: manifest.get(k) for k in wanted}
+    if isinstance(have["config"], dict) and "split" not in have["config"]:
+        have["config"] = dict(have["config"], split="hash")
+    return have
+
+
 def run_build(out_dir: Path, sources: list[SourceSpec], config: BuildConfig, workers: int,
               progress: bool = True, on_shard: Callable[[str], None] | None = None) -> dict:
     """Build (or finish) the dataset in ``out_dir``; returns the final manifest."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    tasks = plan_shards(sources, config.objects_per_shard)
+    tasks = plan_shards(sources, config.objects_per_shard, config.split)
     source_text = json.dumps([asdict(s) for s in sources], sort_keys=True).encode("utf-8")
     wanted = {"config": asdict(config), "sources": len(sources),
               "sources_sha256": hashlib.sha256(source_text).hexdigest()}  # a digest keeps the manifest small
     manifest = load_manifest(out_dir)
     if manifest is None:
         manifest = dict(wanted, shards={}, complete=False)
-    elif {k: manifest.get(k) for k in wanted} != wanted:
+    elif _comparable(manifest, wanted) != wanted:
         raise InputFileError(out_dir, "holds a build with other settings or sources; use a new --out directory")
     todo = [t for t in tasks if not finished(out_dir, manifest, t.name)]
     for t in todo:

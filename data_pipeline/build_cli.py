@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+SPLIT_CHOICES = ("hash", "train", "val", "test")  # data_pipeline.build.SPLIT_CHOICES (not imported: keeps --help fast)
+
 BUILD_DESCRIPTION = """\
 Render procedural objects into ArrayRecord shards of training records (SPEC §4).
 
@@ -23,7 +25,13 @@ IMPORT_DESCRIPTION = """\
 Convert URDF / MJCF objects (e.g. PartNet-Mobility folders with mobility.urdf) and render them
 into ArrayRecord shards, like `jax3dc data build`.
 
+By default objects are split into train/val/test by a hash of their folder name, as in
+`jax3dc data build`; --split train|val|test puts every imported object in that one split (e.g. a
+held-out set of real objects for `jax3dc eval run`). The choice is part of the build's settings:
+resuming into the same --out with another --split is refused.
+
 example:  jax3dc data import partnet/door_8877 partnet/microwave_7119 --out data/imported
+example:  jax3dc data import real/* --out data/real_test --split test
 """
 
 
@@ -55,6 +63,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                 description=IMPORT_DESCRIPTION,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     imp.add_argument("paths", nargs="+", metavar="PATH", type=Path, help="URDF / MJCF files or object folders")
+    imp.add_argument("--split", choices=SPLIT_CHOICES, default="hash",
+                     help="hash: each object's split from SHA-256 of its folder name (default); "
+                     "train / val / test: every object in that split")
     _common(imp)
     imp.set_defaults(func=run_import_command)
 
@@ -74,7 +85,7 @@ def _run(args: argparse.Namespace, sources: list) -> int:
     if args.views < 1 or args.workers < 1 or args.size < 16 or args.objects_per_shard < 1:
         raise SystemExit("--views, --workers, --objects-per-shard must be >= 1 and --size >= 16")
     config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard,
-                         augment=args.augment)
+                         augment=args.augment, split=getattr(args, "split", "hash"))
     manifest = run_build(args.out, sources, config, args.workers, progress=not args.quiet)
     if not args.quiet:
         total = sum(s["records"] for s in manifest["shards"].values())

@@ -52,8 +52,9 @@ def derived_rng(*keys: object) -> np.random.Generator:
     return np.random.default_rng(int.from_bytes(digest[:16], "big"))
 
 
-def object_records(obj: SourceObject, views: int, seed: int, size: int) -> list[Record]:
-    """``views`` records of ``obj``: view 0 at rest, later views each with one joint moved."""
+def object_records(obj: SourceObject, views: int, seed: int, size: int, split: str | None = None) -> list[Record]:
+    """``views`` records of ``obj``: view 0 at rest, later views each with one joint moved.
+    ``meta["split"]`` is ``split``, else ``split_of(obj.object_id)``."""
     rng = derived_rng(seed, obj.category, obj.object_id, obj.augmentation or "")
     palette = object_palette(obj.category, obj.object_id)
     renderer = PartRenderer(obj.parts, part_rgba(obj.structure, rng), sample_lighting(rng), size)
@@ -72,7 +73,7 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int) -> list[
             key = "/".join([obj.category, obj.object_id, str(view), *tail])
             meta = {
                 "category": obj.category, "object_id": obj.object_id, "seed": seed, "view": view,
-                "split": split_of(obj.object_id), "granularity": obj.granularity,
+                "split": split or split_of(obj.object_id), "granularity": obj.granularity,
                 "scale_m_per_nu": obj.scale_m_per_nu, "camera": camera.to_dict(),
                 "boxes": boxes_to_dict(boxes), "augmentation": obj.augmentation,
                 "moved_joint": posed.moved_joint, "theta": round(posed.theta, 4),

@@ -1,7 +1,8 @@
 """The ``jax3dc eval`` command group: score predictions, score the no-training baselines.
 
 Each module in SUBCOMMAND_MODULES has ``register(subparsers)`` adding more ``jax3dc eval ...``
-subcommands (``eval run``: batched generation over a test split and a report folder).
+subcommands (``eval run``: batched generation over a test split, or every record with ``--split all``,
+and a report folder).
 """
 
 from __future__ import annotations

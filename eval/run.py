@@ -1,4 +1,5 @@
-"""``jax3dc eval run``: generate structures for a test split, score them and write a report folder.
+"""``jax3dc eval run``: generate structures for a test split (or ``--split all``: every record),
+score them and write a report folder.
 
 Three sources of predictions: the checkpoint (batched jitted generation, resumable through
 predictions.jsonl), ``--predictions FILE`` (score lines made elsewhere), or
@@ -13,6 +14,8 @@ from pathlib import Path
 
 from jax3dc.cli import positive_int
 from jax3dc.errors import InputFileError, Jax3dcError
+
+ALL_SPLITS = "all"  # --split value that reads every shard and keeps every record
 
 
 def _write_references(refs: list, path: Path) -> None:
@@ -38,13 +41,14 @@ def run_eval(args: argparse.Namespace) -> int:
     sources = [args.predictions is not None, args.reference_as_prediction, args.checkpoint is not None]
     if sum(sources) != 1:
         raise Jax3dcError("give exactly one of --checkpoint, --predictions, --reference-as-prediction")
+    split = None if args.split == ALL_SPLITS else args.split  # None: every shard, every record
     records = []
-    for record in read_records(shard_paths(args.data, args.split), args.split):
+    for record in read_records(shard_paths(args.data, split), split):
         records.append(record)
         if args.limit and len(records) >= args.limit:
             break
     if not records:
-        raise InputFileError(", ".join(args.data), f"no records of split {args.split!r}")
+        raise InputFileError(", ".join(args.data), "no records" if split is None else f"no records of split {split!r}")
     by_key = {r.key: r for r in records}
     if len(by_key) != len(records):
         raise InputFileError(", ".join(args.data), "duplicate record keys")
@@ -104,7 +108,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      '({"key", "text"} or {"key", "structure"} lines)')
     run.add_argument("--reference-as-prediction", action="store_true",
                      help="score each record's own target (sanity check: everything must be 100)")
-    run.add_argument("--split", default="test", help="split to evaluate: shard-name prefix and meta.split (default test)")
+    run.add_argument("--split", default="test",
+                     help="split to evaluate: shard-name prefix and meta.split (default test); "
+                     f"'{ALL_SPLITS}' scores every record of every shard")
     run.add_argument("--limit", type=int, default=0, help="evaluate only the first N records (0 = all)")
     run.add_argument("--batch-size", type=positive_int, default=8, help="rows generated together (default 8)")
     run.add_argument("--max-new-tokens", type=positive_int, default=2048, help="generation stops here at the latest (default 2048)")

@@ -104,3 +104,71 @@ def test_build_cli_objects_and_scenes(tmp_path):
     assert len(records) == 2 * 2 + 2 * 2  # objects x views + scene (part, object) x views
     assert main(args) == 0  # a finished build run again is a no-op
     assert [r.key for r in read_dataset(tmp_path)] == [r.key for r in records]
+
+
+def test_plan_with_a_fixed_split_puts_every_object_there():
+    sources = factory_sources(12, 0)
+    assert {split_of(s.object_id) for s in sources} != {"val"}  # hashing alone would spread them
+    tasks = plan_shards(sources, 5, "val")
+    assert [t.name for t in tasks] == ["val-00000.array_record", "val-00001.array_record", "val-00002.array_record"]
+    assert [s.object_id for t in tasks for s in t.sources] == [s.object_id for s in sources]
+    assert plan_shards(sources, 5) == plan_shards(sources, 5, "hash")
+    with pytest.raises(ValueError):
+        plan_shards(sources, 5, "everything")
+
+
+def _write_urdf(folder, length: float) -> None:
+    """A two-link URDF object (box base, hinged box lid) in ``folder``."""
+    folder.mkdir(parents=True)
+    (folder / "object.urdf").write_text(f"""<robot name="{folder.name}">
+  <link name="base"><visual><geometry><box size="{length} 0.4 0.3"/></geometry></visual></link>
+  <link name="lid"><visual><origin xyz="0 0.2 0.02"/><geometry><box size="{length} 0.4 0.04"/></geometry></visual></link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="lid"/>
+    <origin xyz="0 -0.2 0.15"/><axis xyz="1 0 0"/><limit lower="0" upper="1.5"/></joint>
+</robot>
+""")
+
+
+def test_import_cli_split_names_shards_meta_and_manifest(tmp_path):
+    from jax3dc.cli import main
+
+    folders = [tmp_path / "src" / f"box_{k}" for k in range(4)]
+    for k, folder in enumerate(folders):
+        _write_urdf(folder, 0.5 + 0.1 * k)
+    assert {split_of(f.name) for f in folders} != {"test"}  # the default would not put them all in test
+    common = ["--views", "1", "--size", "32", "--objects-per-shard", "3", "--quiet"]
+    out = tmp_path / "test_split"
+    assert main(["data", "import", *map(str, folders), "--out", str(out), "--split", "test", *common]) == 0
+    manifest = load_manifest(out)
+    assert manifest["config"]["split"] == "test"
+    assert sorted(manifest["shards"]) == ["test-00000.array_record", "test-00001.array_record"]
+    assert {s["split"] for s in manifest["shards"].values()} == {"test"}
+    assert sorted(p.name for p in out.glob("*.array_record")) == sorted(manifest["shards"])
+    records = list(read_dataset(out))
+    assert sorted(r.meta["object_id"] for r in records) == [f.name for f in folders]
+    assert {r.meta["split"] for r in records} == {"test"}
+    # the same build again is a no-op; another --split in the same folder is refused
+    assert main(["data", "import", *map(str, folders), "--out", str(out), "--split", "test", *common]) == 0
+    assert main(["data", "import", *map(str, folders), "--out", str(out), *common]) == 1
+    assert main(["data", "import", *map(str, folders), "--out", str(out), "--split", "train", *common]) == 1
+
+    # default: the hash split, recorded as such
+    hashed = tmp_path / "hash_split"
+    assert main(["data", "import", *map(str, folders), "--out", str(hashed), *common]) == 0
+    assert load_manifest(hashed)["config"]["split"] == "hash"
+    assert all(r.meta["split"] == split_of(r.meta["object_id"]) for r in read_dataset(hashed))
+
+
+def test_manifest_from_before_the_split_setting_resumes_as_hash(tmp_path):
+    import json
+
+    sources = factory_sources(1, 0)
+    run_build(tmp_path, sources, BuildConfig(1, 0, 32, 1), workers=1, progress=False)
+    path = tmp_path / "manifest.json"
+    manifest = json.loads(path.read_text())
+    del manifest["config"]["split"]
+    manifest["complete"] = False
+    path.write_text(json.dumps(manifest))
+    run_build(tmp_path, sources, BuildConfig(1, 0, 32, 1), workers=1, progress=False)
+    with pytest.raises(InputFileError):
+        run_build(tmp_path, sources, BuildConfig(1, 0, 32, 1, split="test"), workers=1, progress=False)

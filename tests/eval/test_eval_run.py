@@ -139,6 +139,31 @@ def test_bad_inputs_are_one_line_errors(shards: Path, tmp_path: Path, capsys) ->
     assert "nowhere" in err and "exactly one of" in err and "no records of split 'val'" in err
 
 
+def test_split_all_scores_every_record_of_every_dataset(shards: Path, tmp_path: Path) -> None:
+    """--split all reads every shard (train ones too) and keeps every record whatever its meta.split,
+    across several --data folders at once."""
+    from array_record.python.array_record_module import ArrayRecordWriter
+
+    other = tmp_path / "other"
+    other.mkdir()
+    writer = ArrayRecordWriter(str(other / "val-00000.array_record"), "group_size:1")
+    writer.write(encode_record(factory_record("laptop", 7, "val")))
+    writer.close()
+    out = tmp_path / "report"
+    assert main(["eval", "run", "--data", str(shards), str(other), "--split", "all", "--reference-as-prediction",
+                 "--out", str(out), "--overlays", "0"]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    expected = sorted([*keys(), "wardrobe/wardrobe_000005/0", "laptop/laptop_000007/0"])
+    assert metrics["counts"]["objects"] == len(expected) == 5
+    assert sorted(r["key"] for r in read_jsonl(out / "per_object.jsonl")) == expected
+    assert sorted(r["key"] for r in read_jsonl(out / "references.jsonl")) == expected
+    assert metrics["parse"] == pytest.approx(100.0) and metrics["success"] == pytest.approx(100.0)
+    # the default is still the test split alone
+    assert main(["eval", "run", "--data", str(shards), str(other), "--reference-as-prediction",
+                 "--out", str(tmp_path / "test_only"), "--overlays", "0"]) == 0
+    assert json.loads((tmp_path / "test_only" / "metrics.json").read_text())["counts"]["objects"] == 3
+
+
 def test_reference_run_on_a_data_build(tmp_path: Path) -> None:
     """Shards written by `jax3dc data build` (its meta camera and boxes) score 100 with overlays."""
     data, out = tmp_path / "data", tmp_path / "report"
