@@ -51,6 +51,7 @@ class BuildConfig:
     objects_per_shard: int
     augment: bool = False  # also one split and one merge variant per object (one view each)
     split: str = "hash"  # "hash": by SHA-256 of the object id; "train" / "val" / "test": every object there
+    appearance: str = "plain"  # look of I: "plain" (one look) or "varied" (lights, backdrop, colours, camera)
 
 
 SPLIT_CHOICES = ("hash", "train", "val", "test")
@@ -117,19 +118,34 @@ def load_sources(spec: SourceSpec) -> list[SourceObject]:
     return [load_source(spec)]
 
 
+def config_doc(config: BuildConfig) -> dict:
+    """The config as a manifest records it: ``appearance`` only when it is not "plain", so a plain
+    build writes (and resumes) the manifest of builds made before the option existed."""
+    from data_pipeline.render import APPEARANCES
+
+    if config.appearance not in APPEARANCES:
+        raise ValueError(f"appearance must be one of {', '.join(APPEARANCES)}, not {config.appearance!r}")
+    doc = asdict(config)
+    if doc.get("appearance") == "plain":
+        del doc["appearance"]
+    return doc
+
+
 def build_shard(task: ShardTask, out_dir: str, config: BuildConfig) -> tuple[str, int, str]:
     """Render every object of ``task`` and write its shard; returns (name, records, sha256)."""
     def records():
         for spec in task.sources:
             objects = load_sources(spec)
             for obj in objects:
-                yield from object_records(obj, config.views, config.seed, config.size, split=task.split)
+                yield from object_records(obj, config.views, config.seed, config.size, split=task.split,
+                                          appearance=config.appearance)
             if config.augment and spec.kind != "scene":
                 obj = objects[0]
                 rng = derived_rng(config.seed, "augment", obj.object_id)
                 for variant in (split_part(obj, rng), merge_parts(obj, rng)):
                     if variant is not None:
-                        yield from object_records(variant, 1, config.seed, config.size, split=task.split)
+                        yield from object_records(variant, 1, config.seed, config.size, split=task.split,
+                                                  appearance=config.appearance)
 
     count, sha = write_shard(Path(out_dir) / task.name, records())
     return task.name, count, sha
@@ -153,7 +169,7 @@ def run_build(out_dir: Path, sources: list[SourceSpec], config: BuildConfig, wor
     out_dir.mkdir(parents=True, exist_ok=True)
     tasks = plan_shards(sources, config.objects_per_shard, config.split)
     source_text = json.dumps([asdict(s) for s in sources], sort_keys=True).encode("utf-8")
-    wanted = {"config": asdict(config), "sources": len(sources),
+    wanted = {"config": config_doc(config), "sources": len(sources),
               "sources_sha256": hashlib.sha256(source_text).hexdigest()}  # a digest keeps the manifest small
     manifest = load_manifest(out_dir)
     if manifest is None:

@@ -45,6 +45,11 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--augment", action="store_true",
                         help="also render a split variant (an articulated leaf cut in two) and a merge variant "
                         "(two compatible sibling leaves joined) of each object, one view each")
+    parser.add_argument("--appearance", choices=("plain", "varied"), default="plain",
+                        help="look of the images I (S is the same either way): plain = one lighting, black "
+                        "background, material colours, fixed field of view (default); varied = random lights, "
+                        "sky / floor, jittered part colours and textures, camera distance and field of view, "
+                        "all from the build seed")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
 
@@ -85,7 +90,8 @@ def _run(args: argparse.Namespace, sources: list) -> int:
     if args.views < 1 or args.workers < 1 or args.size < 16 or args.objects_per_shard < 1:
         raise SystemExit("--views, --workers, --objects-per-shard must be >= 1 and --size >= 16")
     config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard,
-                         augment=args.augment, split=getattr(args, "split", "hash"))
+                         augment=args.augment, split=getattr(args, "split", "hash"),
+                         appearance=args.appearance)
     manifest = run_build(args.out, sources, config, args.workers, progress=not args.quiet)
     if not args.quiet:
         total = sum(s["records"] for s in manifest["shards"].values())

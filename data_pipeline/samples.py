@@ -15,7 +15,8 @@ import numpy as np
 import trimesh
 
 from data_pipeline.record import Record
-from data_pipeline.render import PartRenderer, paint_segmentation, part_rgba, png_bytes, sample_camera, sample_lighting
+from data_pipeline.render import (APPEARANCES, PartRenderer, paint_segmentation, part_rgba, png_bytes, sample_appearance,
+                                  sample_camera, sample_lighting, sample_view_lighting, vary_camera)
 from data_pipeline.views import sample_view_pose
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.palette import object_palette
@@ -52,20 +53,38 @@ def derived_rng(*keys: object) -> np.random.Generator:
     return np.random.default_rng(int.from_bytes(digest[:16], "big"))
 
 
-def object_records(obj: SourceObject, views: int, seed: int, size: int, split: str | None = None) -> list[Record]:
+def object_records(obj: SourceObject, views: int, seed: int, size: int, split: str | None = None,
+                   appearance: str = "plain") -> list[Record]:
     """``views`` records of ``obj``: view 0 at rest, later views each with one joint moved.
-    ``meta["split"]`` is ``split``, else ``split_of(obj.object_id)``."""
-    rng = derived_rng(seed, obj.category, obj.object_id, obj.augmentation or "")
+    ``meta["split"]`` is ``split``, else ``split_of(obj.object_id)``.
+
+    ``appearance`` "plain": today's look, byte for byte. "varied": lights, sky, floor, part colours,
+    textures, camera distance and field of view drawn from their own generators, derived from the
+    object's keys plus "appearance" (per object) and the view number (per view); the poses,
+    azimuth and elevation come from the object's generator exactly as in "plain", so S of a
+    varied view equals the plain S of the same pose and camera."""
+    if appearance not in APPEARANCES:
+        raise ValueError(f"appearance must be one of {', '.join(APPEARANCES)}, not {appearance!r}")
+    keys = (seed, obj.category, obj.object_id, obj.augmentation or "")
+    rng = derived_rng(*keys)
     palette = object_palette(obj.category, obj.object_id)
-    renderer = PartRenderer(obj.parts, part_rgba(obj.structure, rng), sample_lighting(rng), size)
+    rgba, lighting = part_rgba(obj.structure, rng), sample_lighting(rng)  # drawn in both looks: same poses after
+    look = sample_appearance(obj.structure, derived_rng(*keys, "appearance")) if appearance == "varied" else None
+    renderer = PartRenderer(obj.parts, rgba, lighting, size, look)
     try:
         records = []
         for view in range(views):
             posed = sample_view_pose(obj.structure, obj.parts, view, rng)
             lo = np.min([m.bounds[0] for m in posed.parts.values()], axis=0)
             hi = np.max([m.bounds[1] for m in posed.parts.values()], axis=0)
-            camera = sample_camera(rng, centre=(lo + hi) / 2.0, radius=float(np.linalg.norm(hi - lo)) / 2.0)
-            rgb, ids = renderer.render(posed.poses, camera)
+            radius = float(np.linalg.norm(hi - lo)) / 2.0
+            camera = sample_camera(rng, centre=(lo + hi) / 2.0, radius=radius)
+            view_lighting = None
+            if look is not None:
+                view_rng = derived_rng(*keys, "appearance", view)
+                camera = vary_camera(camera, radius, view_rng)
+                view_lighting = sample_view_lighting(view_rng)
+            rgb, ids = renderer.render(posed.poses, camera, view_lighting)
             boxes = part_boxes(posed.parts)
             structure = canonicalize(with_extracted_relations(posed.structure, posed.parts), boxes)
             visible = set(np.unique(ids).tolist()) - {0}
@@ -79,6 +98,8 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
                 "moved_joint": posed.moved_joint, "theta": round(posed.theta, 4),
                 "hidden_parts": sorted(set(obj.parts) - visible), "size": size,
             }
+            if look is not None:
+                meta["appearance"] = appearance
             records.append(Record(
                 key=key, image_png=png_bytes(rgb), seg_png=png_bytes(paint_segmentation(ids, palette)),
                 prompt=build_prompt(boxes, palette, len(structure.joints()) or None),
