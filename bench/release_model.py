@@ -103,11 +103,14 @@ def main() -> None:
     p.add_argument("--objects", type=int, default=4000)
     p.add_argument("--scenes", type=int, default=120)
     p.add_argument("--views", type=int, default=2)
+    p.add_argument("--augment", action=argparse.BooleanOptionalAction, default=True,
+                   help="split/merge variants of each object (default on)")
     p.add_argument("--appearance", default="varied", help="`data build --appearance` (empty: the build's default)")
     p.add_argument("--image-size", type=int, default=224)
     p.add_argument("--vocab", type=int, default=2048)
     p.add_argument("--real", default="", help="shards of imported real training objects (train split)")
     p.add_argument("--real-weight", type=float, default=0.1, help="share of training examples from --real")
+    p.add_argument("--compare", default="", help="an earlier release folder scored on the same records")
     p.add_argument("--fixtures", default="", help="shards of real objects never trained on, scored per object")
     p.add_argument("--steps", type=int, default=6000)
     p.add_argument("--batch", type=int, default=32)
@@ -133,7 +136,7 @@ def main() -> None:
     if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
         t = time.perf_counter()
         build = ["data", "build", "--out", str(data), "--objects", str(a.objects), "--scenes", str(a.scenes),
-                 "--views", str(a.views), "--augment", "--size", str(a.image_size), "--workers", workers, "--quiet"]
+                 "--views", str(a.views), *(["--augment"] if a.augment else []), "--size", str(a.image_size), "--workers", workers, "--quiet"]
         _call(build + (["--appearance", a.appearance] if a.appearance else []))
         print(f"[release] data: {time.perf_counter() - t:.0f} s", flush=True)
 
@@ -167,6 +170,9 @@ def main() -> None:
         _package(train_dir, release)
     results = {"procedural": _evaluate(release, [str(data)], "test", out / "eval_procedural", a.eval_records,
                                        a.eval_batch, a.max_new_tokens)}
+    if a.compare:
+        results["procedural_compare"] = _evaluate(Path(a.compare), [str(data)], "test", out / "eval_procedural_compare",
+                                                  a.eval_records, a.eval_batch, a.max_new_tokens)
     if a.fixtures:
         results["real_fixtures"] = _evaluate(release, a.fixtures.split(","), "test", out / "eval_fixtures", 0,
                                              a.eval_batch, a.max_new_tokens)

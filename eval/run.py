@@ -39,8 +39,12 @@ def run_eval(args: argparse.Namespace) -> int:
     from eval.report import write_report
 
     sources = [args.predictions is not None, args.reference_as_prediction, args.checkpoint is not None]
-    if sum(sources) != 1:
-        raise Jax3dcError("give exactly one of --checkpoint, --predictions, --reference-as-prediction")
+    if sum(sources) > 1:
+        raise Jax3dcError("give at most one of --checkpoint, --predictions, --reference-as-prediction")
+    if not any(sources):  # the shipped default model
+        from jax3dc.release import default_structure_model
+
+        args.checkpoint = str(default_structure_model())
     split = None if args.split == ALL_SPLITS else args.split  # None: every shard, every record
     records = []
     for record in read_records(shard_paths(args.data, split), split):
@@ -102,7 +106,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--data", nargs="+", required=True, metavar="SHARDS",
                      help="ArrayRecord shard files, or folders searched for them")
     run.add_argument("--out", required=True, help="report folder (created; reused to resume)")
-    run.add_argument("--checkpoint", help="Hugging Face checkpoint folder (config.json, safetensors, tokenizer, "
+    run.add_argument("--checkpoint", help="Hugging Face checkpoint folder (default: the shipped model, jax3dc/release) (config.json, safetensors, tokenizer, "
                      "preprocessor_config.json)")
     run.add_argument("--predictions", help="score this predictions JSONL instead of generating "
                      '({"key", "text"} or {"key", "structure"} lines)')

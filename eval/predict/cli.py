@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from eval.predict.models import DEFAULT_MAX_NEW_TOKENS
+from jax3dc.release import default_structure_model
 
 DESCRIPTION = """\
 Predict the articulated structure of the object in IMAGE and write simulation-ready assets.
@@ -60,7 +61,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--stage1", required=True, metavar="code|mesh:FILE|parts:DIR",
                    help="where the part meshes come from: `code` (the code model), `mesh:FILE` (.glb/.gltf/.obj) "
                         "or `parts:DIR` (a folder of <id>.obj)")
-    p.add_argument("--structure-model", metavar="DIR", help="stage-2 checkpoint folder (config.json + safetensors)")
+    p.add_argument("--structure-model", metavar="DIR", default=str(default_structure_model()),
+                   help="stage-2 checkpoint folder (config.json + safetensors; default: the shipped model in "
+                        "jax3dc/release, see its MODEL_CARD.md)")
     p.add_argument("--code-model", metavar="DIR",
                    help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
     p.add_argument("--camera", metavar="FILE", help=CAMERA_HELP)

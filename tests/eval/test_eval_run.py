@@ -132,11 +132,12 @@ def _reference_lines(shards: Path, tmp_path: Path) -> Path:
 def test_bad_inputs_are_one_line_errors(shards: Path, tmp_path: Path, capsys) -> None:
     assert main(["eval", "run", "--data", str(tmp_path / "nowhere"), "--reference-as-prediction",
                  "--out", str(tmp_path / "o")]) == 1
-    assert main(["eval", "run", "--data", str(shards), "--out", str(tmp_path / "o")]) == 1  # no source
+    assert main(["eval", "run", "--data", str(shards), "--reference-as-prediction", "--predictions",
+                 str(tmp_path / "p.jsonl"), "--out", str(tmp_path / "o")]) == 1  # two sources
     assert main(["eval", "run", "--data", str(shards), "--split", "val", "--reference-as-prediction",
                  "--out", str(tmp_path / "o")]) == 1
     err = capsys.readouterr().err
-    assert "nowhere" in err and "exactly one of" in err and "no records of split 'val'" in err
+    assert "nowhere" in err and "at most one of" in err and "no records of split 'val'" in err
 
 
 def test_split_all_scores_every_record_of_every_dataset(shards: Path, tmp_path: Path) -> None:

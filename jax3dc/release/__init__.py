@@ -1,0 +1,19 @@
+"""The shipped default model: a small Qwen3-VL trained from scratch by `bench/release_model.py`.
+
+Pretrained Qwen3-VL weights cannot be fetched at run time, so the package carries its own
+stage-2 structure model (bf16, under 24 MiB; SPEC §7). `predict`, `eval run` and `demo` use this
+folder when no model folder is given. MODEL_CARD.md beside this file names its data, licence,
+training run and measured tables; release_summary.json holds the recipe's own figures.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+MODEL_DIR = Path(__file__).resolve().parent
+"""An HF checkpoint folder (config.json, safetensors shards, tokenizer, processor config)."""
+
+
+def default_structure_model() -> Path:
+    """The folder `--structure-model` / `--checkpoint` fall back to."""
+    return MODEL_DIR
