@@ -56,15 +56,15 @@ def camera_from_dict(doc: Any, where: str) -> Camera:
         raise InputFileError(where, "camera lookat must be 3 finite numbers and distance/azimuth/elevation finite")
     if values[0] <= 0:
         raise InputFileError(where, "camera distance must be positive")
+    fovy = FOVY_DEGREES
     if "fovy" in doc:
         try:
             fovy = float(doc["fovy"])
         except (TypeError, ValueError):
             raise InputFileError(where, "camera fovy must be a number of degrees") from None
-        if fovy != FOVY_DEGREES:
-            raise InputFileError(where, f"camera fovy {fovy:g} is not supported: S is rendered with MuJoCo's "
-                                        f"{FOVY_DEGREES:g}-degree vertical field of view")
-    return Camera(lookat=lookat, distance=values[0], azimuth=values[1], elevation=values[2])
+        if not 1.0 <= fovy <= 170.0:
+            raise InputFileError(where, f"camera fovy {fovy:g} is outside 1-170 degrees")
+    return Camera(lookat=lookat, distance=values[0], azimuth=values[1], elevation=values[2], fovy=fovy)
 
 
 def load_camera(path: str | Path) -> Camera:

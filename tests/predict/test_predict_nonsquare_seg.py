@@ -1,4 +1,4 @@
-"""S of a non-square image: its own aspect with the camera's 45-degree vertical field of view.
+"""S of a non-square image: its own aspect with the camera's vertical field of view (45 degrees unless given).
 
 References: a pinhole projection of the object's vertices (eval.overlay.project, independent of
 MuJoCo), and the square dataset render, whose central columns a same-height view must reproduce.
@@ -41,10 +41,23 @@ def test_same_height_views_share_the_central_columns():
     assert np.count_nonzero(wide) > np.count_nonzero(square) * 0.99  # nothing lost off the sides
 
 
-def test_camera_fovy_other_than_45_is_refused():
+@pytest.mark.parametrize("fovy", [30.0, 60.0])
+def test_camera_fovy_reaches_the_segmentation(fovy):
+    """Varied-look records carry their field of view; S must be rendered with it."""
+    camera = camera_from_dict({**CAMERA.to_dict(), "fovy": fovy}, "cam.json")
+    assert camera.fovy == fovy
+    parts = factory_object().parts
+    ids = render_part_ids(parts, camera, 64)
+    vertices = np.concatenate([np.asarray(m.vertices) for m in parts.values()])
+    uv = project(vertices, camera.to_dict(), (64, 64))
+    want = np.array([*uv.min(axis=0), *uv.max(axis=0)])
+    np.testing.assert_allclose(silhouette_box(ids), want, atol=1.5)
+
+
+def test_camera_fovy_is_checked():
     doc = CAMERA.to_dict()
     assert camera_from_dict({**doc, "fovy": 45}, "cam.json") == camera_from_dict(doc, "cam.json")
-    with pytest.raises(InputFileError, match="fovy 60"):
-        camera_from_dict({**doc, "fovy": 60}, "cam.json")
+    with pytest.raises(InputFileError, match="fovy 200 is outside"):
+        camera_from_dict({**doc, "fovy": 200}, "cam.json")
     with pytest.raises(InputFileError, match="fovy must be a number"):
         camera_from_dict({**doc, "fovy": "wide"}, "cam.json")
