@@ -16,7 +16,13 @@ from jax3dc.errors import Jax3dcError
 
 
 class ConfigError(Jax3dcError):
-    """An override names no field of TrainConfig, or its value does not parse as the field's type."""
+    """An override names no field of TrainConfig, its value does not parse as the field's type,
+    or the settings cannot make a run (validate)."""
+
+
+#: validate's error when no training data is named (TrainConfig.data is empty).
+NO_DATA = ("no training data: pass --set data=DIR[,DIR...] (folders from 'jax3dc data build' / "
+           "'jax3dc data import'), or --set data=synthetic for the built-in counting sequences used in speed tests")
 
 
 @dataclass(frozen=True)
@@ -35,11 +41,12 @@ class TrainConfig:
     # Model: a preset name (tiny, small, qwen3_vl_4b: random weights) or an HF checkpoint dir.
     init: str = "small"
     output_dir: str = "runs/train"
-    # Data: "synthetic" (built-in counting sequences) or dataset folders (comma-separated) that
-    # the grain loader (data_pipeline/loader.py) reads, mixed by data_weights.
-    data: str = "synthetic"
+    # Data (required; empty stops the run with NO_DATA): dataset folders (comma-separated) that
+    # the grain loader (data_pipeline/loader.py) reads, mixed by data_weights, or "synthetic":
+    # built-in counting sequences for speed and sharding tests, which teach a model nothing.
+    data: str = ""
     data_weights: tuple[float, ...] = ()
-    val_data: str = ""  # empty: validate on held-out synthetic / the datasets' val split
+    val_data: str = ""  # empty: validate on the datasets' val split (held-out sequences for synthetic)
     task: str = "structure"  # structure: I + S + prompt -> JSON; code: I -> part program
     tokenizer: str = ""  # folder with tokenizer.json; empty: the init checkpoint's, else Qwen3's
     pack: int = 6  # examples packed per row at most (1: one padded example per row); ~1.5k tokens each at 448 px
@@ -148,8 +155,16 @@ def to_json(cfg: TrainConfig) -> str:
     return json.dumps(dataclasses.asdict(cfg), indent=1, sort_keys=True)
 
 
+def require_data(cfg: TrainConfig) -> None:
+    """ConfigError(NO_DATA) unless cfg.data names something to train on."""
+    if not any(s.strip() for s in cfg.data.split(",")):
+        raise ConfigError(NO_DATA)
+
+
 def validate(cfg: TrainConfig) -> None:
-    """Reject settings that cannot work before any device work starts."""
+    """Reject settings that cannot work before any device work starts (and before the run
+    writes anything)."""
+    require_data(cfg)
     if cfg.batch_size % cfg.grad_accum:
         raise ConfigError(f"batch_size {cfg.batch_size} is not a multiple of grad_accum {cfg.grad_accum}")
     if cfg.task not in ("structure", "code"):

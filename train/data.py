@@ -1,7 +1,8 @@
 """What a run reads: its tokenizer, image processor settings and a loader per split.
 
 ``data=synthetic`` gives the built-in counting sequences (for speed and sharding tests);
-anything else names dataset folders that the grain loader reads. The tokenizer and processor
+anything else names dataset folders that the grain loader reads. There is no default: an empty
+``data`` is a ConfigError (train.config.NO_DATA). The tokenizer and processor
 settings are also written next to the exported model, so generation encodes prompts exactly
 as training did.
 """
@@ -17,7 +18,7 @@ from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.processor import ImageProcessorConfig
 from jax3dc.model.tokenizer import Tokenizer, load_tokenizer
 from train.batch import ImageLayout, SyntheticBatches
-from train.config import ConfigError, TrainConfig
+from train.config import ConfigError, TrainConfig, require_data
 
 
 def run_tokenizer(cfg: TrainConfig) -> Tokenizer:
@@ -60,6 +61,7 @@ def _synthetic(cfg: TrainConfig, model: Qwen3VLConfig, split: str, padding: bool
 def make_loader(cfg: TrainConfig, model: Qwen3VLConfig, split: str, tokenizer: Tokenizer | None = None,
                 processor: ImageProcessorConfig | None = None, padding: bool = True) -> Iterator:
     """This process's loader for `split` ('train' or 'val')."""
+    require_data(cfg)
     if cfg.data == "synthetic":
         return _synthetic(cfg, model, split, padding)
     from data_pipeline.loader import LoaderConfig, ShardLoader

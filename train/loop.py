@@ -151,6 +151,7 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
 
     `on_step(step, metrics)` is called after every step with host floats (for tools and tests).
     """
+    validate(cfg)  # before output_dir exists: a run that cannot start leaves nothing behind
     out = cfg.output_dir
     lead = jax.process_index() == 0
     if lead:

@@ -19,8 +19,20 @@ def test_bad_overrides_raise_config_error(item):
 
 
 def test_validate_rejects_batch_not_divisible_by_accumulation():
-    with pytest.raises(ConfigError):
-        validate(TrainConfig(batch_size=6, grad_accum=4))
+    with pytest.raises(ConfigError, match="grad_accum"):
+        validate(TrainConfig(data="synthetic", batch_size=6, grad_accum=4))
+
+
+@pytest.mark.parametrize("data", ["", " ", ","])
+def test_validate_requires_data(data):
+    with pytest.raises(ConfigError, match="^no training data: pass --set data=DIR") as e:
+        validate(TrainConfig(data=data))
+    assert "\n" not in str(e.value) and "data=synthetic" in str(e.value)
+
+
+def test_validate_accepts_synthetic_and_folders():
+    validate(TrainConfig(data="synthetic"))
+    validate(apply_overrides(TrainConfig(), ["data=runs/a,runs/b"]))
 
 
 def _loader(**kw):

@@ -10,7 +10,7 @@ from train.loop import Trainer, make_loader
 
 @pytest.mark.slow
 def test_frozen_vision_bit_identical_and_decoder_updated(tmp_path):
-    cfg = TrainConfig(init="tiny", output_dir=str(tmp_path), seq_len=32, image_size=16, batch_size=2,
+    cfg = TrainConfig(init="tiny", data="synthetic", output_dir=str(tmp_path), seq_len=32, image_size=16, batch_size=2,
                       grad_accum=2, steps=4, warmup_steps=0, lr=1e-2, compute_dtype="float32")
     trainer = Trainer(cfg)
     frozen0 = [np.asarray(x) for x in jax.tree.leaves(trainer.model.frozen)]
