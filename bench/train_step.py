@@ -41,7 +41,7 @@ def main() -> None:
     from train.metrics_log import peak_flops
     from train.parallel import to_host
 
-    cfg = TrainConfig(init=a.preset, seq_len=a.seq, batch_size=a.batch, grad_accum=1, steps=a.steps + 2,
+    cfg = TrainConfig(init=a.preset, data="synthetic", seq_len=a.seq, batch_size=a.batch, grad_accum=1, steps=a.steps + 2,
                       warmup_steps=1, image_size=a.image, remat=a.remat, master_fp32=a.master_fp32,
                       mesh=MeshConfig(*(int(x) for x in a.mesh.split(","))))
     trainer = Trainer(cfg, attention_impl=a.attention)

@@ -1,21 +1,19 @@
-"""`jax3dc demo`: the README's main job, end to end on the embedded default, on a CPU.
+"""`jax3dc demo`: the README's main job, end to end on a CPU, with the shipped model.
 
 Stages, each printing one line and where its outputs are:
-  1. data       render procedural objects into ArrayRecord shards (split by object)
+  1. data       render procedural objects into ArrayRecord shards (split by object; the test
+                split's objects were never seen by the shipped model)
   2. reference  score the train split's own targets (a sanity run that must give 100)
-  3. baselines  the no-training baselines on that split, scored with the paper's metrics
-  4. export     one held-out object: structure, part meshes, URDF, MJCF, glTF, Blender script,
+  3. export     one held-out object: structure, part meshes, URDF, MJCF, glTF, Blender script,
                 with the MJCF and URDF loaded back in MuJoCo
-  5. train      `jax3dc data tokenizer` (a 1k BPE of the shards), then `jax3dc train`: the `tiny`
-                preset trained from scratch on the train split for a few minutes of CPU time,
-                exported as an HF folder
-  6. evaluate   `jax3dc eval run` of that model on held-out test records, next to the baselines
-  7. predict    `jax3dc predict` on one held-out test image: its part meshes as stage 1, the
-                trained model as stage 2, every output written that can be
-A CPU run this short does not teach a model to write valid structures: the evaluate and predict
-stages report what the model produced (usually parse 0 and a predict that stops at the
-structure with its raw text kept), and the README says how to run the real fine-tune on GPUs.
-Nothing is faked. summary.json lists every stage.
+  4. evaluate   `jax3dc eval run` with the shipped model (jax3dc/release) on held-out test records
+  5. baselines  the no-training baselines on the same references; Table 1 of all of them
+  6. predict    `jax3dc predict` on held-out test images: their part meshes as stage 1, the shipped
+                model as stage 2, then the exports and the physics verdict
+  7. train      only with --train-minutes > 0: `jax3dc data tokenizer` and the `tiny` preset
+                trained from scratch on the train split for that many CPU minutes (a few minutes
+                of CPU teach it nothing useful; GPUs train the real thing: bench/release_model.py)
+summary.json lists every stage.
 """
 
 from __future__ import annotations
@@ -31,15 +29,17 @@ from jax3dc.errors import Jax3dcError
 @dataclass(frozen=True)
 class DemoSize:
     objects: int
-    image: int
-
-
-    train_minutes: float
     eval_records: int
+    predict_images: int
 
 
-SIZES = {"tiny": DemoSize(objects=40, image=48, train_minutes=0.2, eval_records=2),
-         "default": DemoSize(objects=160, image=224, train_minutes=5.0, eval_records=8)}
+SIZES = {"tiny": DemoSize(objects=120, eval_records=4, predict_images=1),
+         "default": DemoSize(objects=400, eval_records=16, predict_images=2)}
+IMAGE = 224  # the shipped model's training renders
+COLUMNS = ("parse", "parent_acc", "edge_f1", "presence_f1", "type_acc", "axis_acc", "pos_err", "range_iou",
+           "success", "sym_f1", "inst_f1")
+PAPER = {"parse": 99.0, "parent_acc": 85.6, "edge_f1": 85.4, "presence_f1": 90.8, "type_acc": 96.3, "axis_acc": 89.5,
+         "pos_err": 0.052, "range_iou": 71.3, "success": 82.4, "sym_f1": 54.2, "inst_f1": 19.4}
 TRAIN_IMAGE = 32  # the tiny preset's 4-pixel patches: 64 per image, 16 tokens
 
 
@@ -80,33 +80,70 @@ def _stage_export(out: Path, seed: int) -> dict:
             "joints_loaded_in_mujoco": joints, "files": {k: str(v) for k, v in files.items()}}
 
 
-def _stage_predict(data: Path, out: Path, model: Path) -> dict:
-    """Predict one held-out test image with its own part meshes as stage 1 and the trained model."""
+def _predict_one(record, out: Path) -> dict:
+    """Predict one held-out test image with its own part meshes as stage 1 and the shipped model."""
     from data_pipeline.factories import generate_object
-    from data_pipeline.shards import shard_paths
-    from eval.generation import read_records
     from eval.predict.pipeline import predict
     from eval.predict.segmentation import camera_from_dict
     from jax3dc.geometry.parts import save_parts
+    from jax3dc.release import default_structure_model
 
-    record = next(read_records(shard_paths([data], "test"), "test"))
     obj = generate_object(record.meta["category"], int(record.meta["seed"]))
     out.mkdir(parents=True, exist_ok=True)
     (out / "input.png").write_bytes(record.image_png)
     save_parts(obj.parts, out / "input_parts")
     try:
-        result = predict(out / "input.png", f"parts:{out / 'input_parts'}", model, out=out / "asset",
-                         camera=camera_from_dict(record.meta["camera"], "record camera"), max_new_tokens=512,
+        result = predict(out / "input.png", f"parts:{out / 'input_parts'}", default_structure_model(), out=out / "asset",
+                         camera=camera_from_dict(record.meta["camera"], "record camera"), max_new_tokens=1024,
                          dtype="float32")
-    except Jax3dcError as e:  # the short-trained model's output: keep what was written, say why
+    except Jax3dcError as e:  # keep what was written, say why
         written = sorted(p.name for p in (out / "asset").iterdir()) if (out / "asset").is_dir() else []
-        return {"status": "partial", "out": str(out / "asset"), "reason": str(e), "key": record.key,
-                "written": written}
-    return {"status": "done", "out": str(out / "asset"), "key": record.key,
-            "files": {k: str(v) for k, v in result.files.items()}}
+        return {"key": record.key, "status": "partial", "out": str(out / "asset"), "reason": str(e), "written": written}
+    verdict = result.verdict or {}
+    return {"key": record.key, "status": "done", "out": str(out / "asset"), "joints": len(result.structure.joints()),
+            "physics_ok": verdict.get("ok"), "files": {k: str(v) for k, v in result.files.items()}}
 
 
-def run_demo(out: Path, size: str = "default", seed: int = 0) -> dict:
+def _stage_predict(data: Path, out: Path, count: int) -> dict:
+    from data_pipeline.shards import shard_paths
+    from eval.generation import read_records
+
+    records = read_records(shard_paths([data], "test"), "test")
+    results = [_predict_one(next(records), out / f"object_{k}") for k in range(count)]
+    status = "done" if all(r["status"] == "done" for r in results) else "partial"
+    return {"status": status, "out": str(out), "objects": results}
+
+
+def _stage_train(data: Path, out: Path, minutes: float) -> dict:
+    """The tiny preset from scratch on the CPU: shows the training path, teaches little."""
+    train, tokenizer = out / "train", out / "tokenizer"
+    # A 1k byte-level BPE of the shards: the tiny model's LM head shrinks from 151,680 rows to 1,024.
+    _cli(["data", "tokenizer", "--data", str(data), "--vocab-size", "1024", "--out", str(tokenizer), "--quiet"])
+    _cli(["train", "--init", "tiny", "--output-dir", str(train), "--steps", "400",
+          *[x for o in (f"data={data}", f"tokenizer={tokenizer}", f"image_size={TRAIN_IMAGE}", "seq_len=2048",
+                        "batch_size=4", "grad_accum=1", "pack=1", "lr=3e-3", "warmup_steps=5",
+                        f"time_limit_min={minutes}", "freeze=", "compute_dtype=float32", "remat=none", "log_every=5",
+                        "eval_every=1000", "eval_batches=1", "save_every=1000") for x in ("--set", o)]])
+    steps = [json.loads(line) for line in (train / "metrics.jsonl").read_text().splitlines()]
+    last = [r for r in steps if r.get("kind") == "train"][-1]
+    return {"out": str(train / "hf"), "steps": last["step"], "loss": round(last["loss"], 3),
+            "first_loss": round(steps[0]["loss"], 3)}
+
+
+def table_1(rows: dict[str, dict]) -> str:
+    """Table 1 as text: one line per system, the paper's row last."""
+    head = f"{'system':<12}" + "".join(f"{c:>12}" for c in COLUMNS)
+    lines = [head]
+    for name, m in {**rows, "paper (Ours)": PAPER}.items():
+        cells = []
+        for c in COLUMNS:
+            v = m.get(c)
+            cells.append(f"{'-':>12}" if v is None else f"{v:>12.3f}" if c == "pos_err" else f"{v:>12.1f}")
+        lines.append(f"{name:<12}" + "".join(cells))
+    return "\n".join(lines)
+
+
+def run_demo(out: Path, size: str = "default", seed: int = 0, train_minutes: float = 0.0) -> dict:
     """Runs every stage into ``out`` and returns (and writes) the summary."""
     spec = SIZES[size]
     out.mkdir(parents=True, exist_ok=True)
@@ -120,13 +157,12 @@ def run_demo(out: Path, size: str = "default", seed: int = 0) -> dict:
 
     t = time.perf_counter()
     data = out / "data"
-    _cli(["data", "build", "--out", str(data), "--objects", str(spec.objects), "--views", "1",
-          "--size", str(spec.image), "--seed", str(seed), "--quiet"])
+    _cli(["data", "build", "--out", str(data), "--objects", str(spec.objects), "--views", "1", "--size", str(IMAGE),
+          "--seed", str(seed), "--appearance", "varied", "--workers", "2", "--quiet"])
     record("data", t, "done", out=str(data))
 
     t = time.perf_counter()
     reference = out / "reference"
-    # The baselines need no training, so they are scored on the larger train split.
     _cli(["eval", "run", "--data", str(data), "--out", str(reference), "--reference-as-prediction",
           "--split", "train", "--overlays", "4"])
     ref_metrics = json.loads((reference / "metrics.json").read_text())
@@ -134,45 +170,36 @@ def run_demo(out: Path, size: str = "default", seed: int = 0) -> dict:
            metrics={k: ref_metrics.get(k) for k in ("parse", "parent_acc", "edge_f1", "presence_f1", "success")})
 
     t = time.perf_counter()
-    baselines = out / "baselines"
-    _cli(["eval", "baselines", "--ref", str(reference / "references.jsonl"), "--out", str(baselines)])
-    table = {}
-    for name in ("star", "heuristic"):
-        m = json.loads((baselines / name / "metrics.json").read_text())
-        table[name] = {k: m.get(k) for k in ("parse", "parent_acc", "edge_f1", "presence_f1", "success")}
-    record("baselines", t, "done", out=str(baselines), metrics=table)
-
-    t = time.perf_counter()
     record("export", t, "done", out=str(out / "asset"), **_stage_export(out / "asset", seed))
 
     t = time.perf_counter()
-    train, tokenizer = out / "train", out / "tokenizer"
-    # A 1k byte-level BPE of the shards: the tiny model's LM head shrinks from 151,680 rows to
-    # 1,024, which is what makes CPU steps affordable (bench/tokenizer.py: 0.35x the FLOPs).
-    _cli(["data", "tokenizer", "--data", str(data), "--vocab-size", "1024", "--out", str(tokenizer), "--quiet"])
-    _cli(["train", "--init", "tiny", "--output-dir", str(train), "--steps", "400",
-          *[x for o in (f"data={data}", f"tokenizer={tokenizer}", f"image_size={TRAIN_IMAGE}", "seq_len=2048", "batch_size=4", "grad_accum=1",
-                        "pack=1", "lr=3e-3", "warmup_steps=5", f"time_limit_min={spec.train_minutes}", "freeze=",
-                        "compute_dtype=float32", "remat=none", "log_every=5", "eval_every=1000", "eval_batches=1",
-                        "save_every=1000") for x in ("--set", o)]])
-    steps = [json.loads(line) for line in (train / "metrics.jsonl").read_text().splitlines()]
-    last = [r for r in steps if r.get("kind") == "train"][-1]
-    record("train", t, "done", out=str(train / "hf"), steps=last["step"], loss=round(last["loss"], 3),
-           first_loss=round(steps[0]["loss"], 3))
-
-    t = time.perf_counter()
     evaluation = out / "evaluate"
-    _cli(["eval", "run", "--checkpoint", str(train / "hf"), "--data", str(data), "--split", "test", "--limit",
-          str(spec.eval_records), "--batch-size", str(spec.eval_records), "--max-new-tokens", "256",
-          "--dtype", "float32", "--out", str(evaluation), "--overlays", "0"])
+    _cli(["eval", "run", "--data", str(data), "--split", "test", "--limit", str(spec.eval_records),
+          "--batch-size", "8", "--max-new-tokens", "1024", "--dtype", "float32", "--out", str(evaluation),
+          "--overlays", "4"])
     m = json.loads((evaluation / "metrics.json").read_text())
-    record("evaluate", t, "done", out=str(evaluation),
-           metrics={k: m.get(k) for k in ("parse", "parent_acc", "edge_f1", "presence_f1", "success")})
+    record("evaluate", t, "done", out=str(evaluation), objects=m["counts"]["objects"],
+           metrics={k: m.get(k) for k in COLUMNS})
 
     t = time.perf_counter()
-    record("predict", t, **_stage_predict(data, out / "predict", train / "hf"))
+    baselines = out / "baselines"
+    _cli(["eval", "baselines", "--ref", str(evaluation / "references.jsonl"), "--out", str(baselines)])
+    rows = {"shipped": m}
+    for name in ("heuristic", "star"):
+        rows[name] = json.loads((baselines / name / "metrics.json").read_text())
+    record("baselines", t, "done", out=str(baselines),
+           metrics={name: {k: rows[name].get(k) for k in COLUMNS} for name in ("heuristic", "star")})
+
+    t = time.perf_counter()
+    record("predict", t, **_stage_predict(data, out / "predict", spec.predict_images))
+
+    if train_minutes > 0:
+        t = time.perf_counter()
+        record("train", t, "done", **_stage_train(data, out, train_minutes))
 
     summary = {"size": size, "seed": seed, "stages": stages}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    print(f"\nTable 1 on {m['counts']['objects']} held-out test records (%; pos_err in nu):\n" + table_1(rows),
+          flush=True)
     print(f"[demo] summary: {out / 'summary.json'}", flush=True)
     return summary
