@@ -15,7 +15,10 @@ from its orbax checkpoint in OUT/train):
                kept out of training), `jax3dc eval baselines` on the same references
   5. package   the weights in bf16, sharded below 16 MiB a file, with the tokenizer, processor
                config and a model card, in OUT/release (what `jax3dc/release/` ships)
-`--init DIR` continues from an earlier release folder instead of random weights (new optimiser).
+`--init DIR` continues from an earlier release folder instead of random weights (new optimiser);
+`--compare DIR` scores an earlier release on the same procedural test records, so a new release
+is committed only when it beats the shipped one. The shipped release 1 came from three such runs
+(docs/BENCHMARKS.md gives the calls).
 """
 
 from __future__ import annotations
