@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
-from collections import Counter
+import io
 from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from data_pipeline.loader import LoaderConfig, LoaderError, ShardLoader, _source
 from data_pipeline.record import decode_record, encode_record
@@ -98,20 +99,72 @@ def test_a_split_without_usable_records_is_an_error_not_a_hang(dataset: Path, tm
         next(loader([tmp_path]))
 
 
-def test_mixture_follows_the_weights(tmp_path: Path) -> None:
-    a = write_dataset(tmp_path / "a", [record(c, 0) for c in CATEGORIES[:4]], shards=1)
-    b = write_dataset(tmp_path / "b", [record(c, 1) for c in CATEGORIES[4:]], shards=1)
-    cfg = LoaderConfig(sources=(str(a), str(b)), weights=(3.0, 1.0), seq_len=SEQ, rows=ROWS, image_size=IMAGE)
-    import grain
+def solid_png(value: int) -> bytes:
+    buf = io.BytesIO()
+    Image.new("RGB", (IMAGE, IMAGE), (value, value, value)).save(buf, format="PNG")
+    return buf.getvalue()
 
-    mixed = grain.MapDataset.mix([_source(shard_paths([a], "train"), cfg)[0], _source(shard_paths([b], "train"), cfg)[0]],
-                                 list(cfg.weights))
-    seeds = Counter(decode_record(mixed[i]).key.split("_")[-1].split("/")[0] for i in range(400))
-    assert abs(seeds["000000"] / 400 - 0.75) < 0.02
-    batch = next(loader([a, b], weights=(3.0, 1.0)))
-    assert batch["input_ids"].shape == (ROWS, SEQ)
+
+@pytest.fixture(scope="module")
+def two_sources(tmp_path_factory) -> tuple[Path, Path]:
+    """Two datasets of different categories whose images tell them apart in a batch: all black in
+    ``a`` (pixels normalise to about -1), all white in ``b`` (about +1)."""
+    root = tmp_path_factory.mktemp("mix")
+
+    def painted(categories, seed, value):
+        return [dataclasses.replace(record(c, seed), image_png=solid_png(value), seg_png=solid_png(value))
+                for c in categories]
+
+    a = write_dataset(root / "a", painted(CATEGORIES[:4], 0, 0), shards=1)
+    b = write_dataset(root / "b", painted(CATEGORIES[4:], 1, 255), shards=1)
+    return a, b
+
+
+MIX_DRAWS = 200  # examples drawn through the loader per weighting
+
+
+def drawn_sources(sources, weights, seed: int = 0, n: int = MIX_DRAWS) -> list[str]:
+    """Which source ("a" or "b") each of the first ``n`` examples our loader packs came from."""
+    it = loader(sources, weights=weights, seed=seed)
+    per_image = 64  # patches of one 32 x 32 image (patch 4)
+    out: list[str] = []
+    while len(out) < n:
+        batch = next(it)
+        for row in range(ROWS):
+            for slot in range(int(batch["segment_ids"][row].max())):
+                first = slot * 2 * per_image  # two images (I and S) per example
+                mean = float(batch["pixel_values"][row, first:first + per_image].mean())
+                assert abs(abs(mean) - 1) < 0.1, mean
+                out.append("a" if mean < 0 else "b")
+    assert not it.skipped, it.skipped  # every record was used: the shares are the mixture's
+    return out[:n]
+
+
+def test_mixture_follows_the_weights(two_sources) -> None:
+    """Our loader (LoaderConfig.weights) mixes its sources in the configured proportion."""
+    a, b = two_sources
+    tol = 0.05
+    drawn = drawn_sources([a, b], (0.8, 0.2))
+    share = drawn.count("a") / len(drawn)
+    assert abs(share - 0.8) < tol, f"share of source a {share:.3f} with weights 0.8/0.2"
+    assert drawn == drawn_sources([a, b], (0.8, 0.2)), "same seed, same mixture order"
+    swapped = drawn_sources([a, b], (0.2, 0.8))
+    share = swapped.count("a") / len(swapped)
+    assert abs(share - 0.2) < tol, f"share of source a {share:.3f} with weights 0.2/0.8"
+    scaled = drawn_sources([a, b], (4.0, 1.0))  # weights are relative
+    assert abs(scaled.count("a") / len(scaled) - 0.8) < tol
+    nearly_a = drawn_sources([a, b], (1.0, 0.01), n=100)  # grain refuses a weight of exactly 0
+    assert nearly_a.count("b") <= 2, f"weight 0.01 for b, yet {nearly_a.count('b')} of 100 examples came from b"
+    even = drawn_sources([a, b], ())  # no weights: equal shares
+    assert abs(even.count("a") / len(even) - 0.5) < tol
+
+
+def test_mixture_weights_are_checked(two_sources) -> None:
+    a, b = two_sources
     with pytest.raises(LoaderError, match="weights"):
         loader([a, b], weights=(1.0,))
+    with pytest.raises(LoaderError, match="weights"):
+        loader([a, b], weights=(1.0, -0.5))
 
 
 def test_wrong_tokenizer_for_the_model_is_refused(dataset: Path) -> None:

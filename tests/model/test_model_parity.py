@@ -128,10 +128,10 @@ def test_vision_tower_and_deepstack_match(pair):
     print(f"rel err {err:.2e}")
     assert err < TOL, err
     assert len(deepstack) == len(out.deepstack_features) == len(cfg.vision.deepstack_visual_indexes)
-    for ours, ref in zip(deepstack, out.deepstack_features):
+    for level, (ours, ref) in enumerate(zip(deepstack, out.deepstack_features)):
         err = rel_err(ours[:n], ref.numpy())
-        print(f"rel err {err:.2e}")
-    assert err < TOL, err
+        print(f"deepstack level {level} rel err {err:.2e}")
+        assert err < TOL, f"deepstack level {level}: rel err {err:.2e}"
 
 
 def test_windowed_vision_attention_matches(pair):
