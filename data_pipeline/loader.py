@@ -219,8 +219,10 @@ def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
         raise LoaderError("no data sources given")
     if cfg.weights and len(cfg.weights) != len(cfg.sources):
         raise LoaderError(f"{len(cfg.weights)} weights for {len(cfg.sources)} sources")
-    if cfg.weights and (min(cfg.weights) < 0 or sum(cfg.weights) <= 0):
-        raise LoaderError(f"mixture weights {cfg.weights} must be >= 0 and not all 0")
+    if cfg.weights and min(cfg.weights) <= 0:  # grain's mix refuses a zero proportion
+        bad = next(s for s, w in zip(cfg.sources, cfg.weights) if w <= 0)
+        raise LoaderError(f"mixture weights {cfg.weights} must all be > 0 ({bad} has "
+                          f"{cfg.weights[cfg.sources.index(bad)]:g}; leave a source out of data= instead of weighting it 0)")
     if not 0 <= cfg.process_index < cfg.process_count:
         raise LoaderError(f"process {cfg.process_index} of {cfg.process_count}")
     layout = row_layout(cfg, model, tokenizer, processor)

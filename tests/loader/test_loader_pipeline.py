@@ -165,6 +165,8 @@ def test_mixture_weights_are_checked(two_sources) -> None:
         loader([a, b], weights=(1.0,))
     with pytest.raises(LoaderError, match="weights"):
         loader([a, b], weights=(1.0, -0.5))
+    with pytest.raises(LoaderError, match="leave a source out"):
+        loader([a, b], weights=(1.0, 0.0))
 
 
 def test_wrong_tokenizer_for_the_model_is_refused(dataset: Path) -> None:
