@@ -6,8 +6,9 @@ file, or an object directory (PartNet-Mobility: ``mobility.urdf`` + ``semantics.
 the structure O (canonical), part meshes and boxes in the normalised frame, and meta (scale in
 metres per nu, source, part names, warnings). ``output.write_imported`` writes it to a folder.
 
-Modules: ``safe_xml`` (defused parsing), ``frames`` (transforms), ``meshes`` (geometry loading),
-``urdf`` / ``mjcf`` (readers into a ``kinematic_tree.KinematicTree``), ``kinematic_tree``
+Modules: ``frames`` (transforms), ``meshes`` (geometry loading),
+``urdf`` / ``mjcf`` (readers into a ``kinematic_tree.KinematicTree``; ``urdf.parse_xml`` parses
+untrusted XML through defusedxml), ``kinematic_tree``
 (which links are parts, which joint moves each), ``material_guess``, ``assemble``.
 This package imports nothing heavy on its own, so the CLI can register quickly.
 """

@@ -17,20 +17,47 @@ from __future__ import annotations
 import math
 import re
 import xml.etree.ElementTree as ET
+import xml.parsers.expat as expat
 from pathlib import Path
 
+import defusedxml
+import defusedxml.ElementTree as DefusedET
 import numpy as np
 from tqdm import tqdm
 
 from data_pipeline.importers import meshes
 from data_pipeline.importers.frames import pose, rpy_matrix, scaling
 from data_pipeline.importers.kinematic_tree import Edge, KinematicTree, Link, Motion
-from data_pipeline.importers.safe_xml import parse_xml
 from jax3dc.errors import InputFileError
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 HINGE_LIMIT = 2 * math.pi  # SPEC §2: hinge ranges lie within [-2pi, 2pi]
 MOVING_SEMANTICS = {"hinge": ("revolute", "continuous"), "slider": ("prismatic",)}
+
+
+def parse_xml(path: Path, root_tag: str | None = None) -> ET.Element:
+    """Parse an untrusted URDF/MJCF file with defusedxml; every failure is one InputFileError line.
+
+    Files come from datasets and the web, so any DOCTYPE is refused (``forbid_dtd``), and with it
+    internal entities (billion laughs) and external ones (file disclosure). If ``root_tag`` is
+    given, the root element must have it. The MJCF reader and the format sniffing use this too.
+    """
+    try:
+        data = Path(path).read_bytes()
+    except OSError as e:
+        raise InputFileError(path, f"cannot read file: {e.strerror or e}") from None
+    try:
+        root = DefusedET.fromstring(data, forbid_dtd=True)
+    except defusedxml.DefusedXmlException as e:
+        raise InputFileError(path, f"DOCTYPE/ENTITY declarations are not accepted ({type(e).__name__})") from None
+    except ET.ParseError as e:
+        line, column = e.position
+        raise InputFileError(
+            path, f"malformed XML at line {line}, column {column}: {expat.ErrorString(e.code)}"
+        ) from None
+    if root_tag is not None and root.tag != root_tag:
+        raise InputFileError(path, f"root element is <{root.tag}>, expected <{root_tag}>")
+    return root
 
 
 def _numbers(path: Path, where: str, text: str | None, count: int, default: tuple[float, ...] | None):

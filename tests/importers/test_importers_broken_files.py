@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from data_pipeline.importers.source import import_object
+from data_pipeline.importers.urdf import parse_xml
 from jax3dc.errors import InputFileError
 
 BOX_LINK = '<link name="{0}"><visual><geometry><box size="1 1 1"/></geometry></visual></link>'
@@ -23,6 +24,7 @@ def _refused(path: Path, *words: str) -> str:
         import_object(path)
     message = str(caught.value)
     assert path.name in message
+    assert "\n" not in message, message
     for word in words:
         assert word in message, message
     return message
@@ -46,6 +48,37 @@ def test_doctype_with_entities_is_refused_before_expansion(tmp_path):
     laughs = "".join(f'<!ENTITY l{i} "{"&l%d;" % (i - 1) * 10}">' for i in range(1, 10))
     text = f'<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY l0 "lol">{laughs}]>\n<robot name="&l9;"/>'
     _refused(_write(tmp_path, text), "DOCTYPE")
+
+
+BILLION_LAUGHS = (
+    '<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY l0 "lol">'
+    + "".join(f'<!ENTITY l{i} "{"&l%d;" % (i - 1) * 10}">' for i in range(1, 10))
+    + ']>\n<robot name="&l9;"/>'
+)
+EXTERNAL_ENTITY = '<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY e SYSTEM "file:///etc/passwd">]>\n<robot name="&e;"/>'
+PARAMETER_ENTITY = '<!DOCTYPE robot [<!ENTITY % p SYSTEM "http://example.invalid/x.dtd"> %p;]>\n<robot/>'
+BARE_DTD = '<!DOCTYPE robot SYSTEM "robot.dtd">\n<robot name="r"/>'
+
+
+@pytest.mark.parametrize("text", [BILLION_LAUGHS, EXTERNAL_ENTITY, PARAMETER_ENTITY, BARE_DTD],
+                         ids=["billion_laughs", "external_entity", "parameter_entity", "bare_dtd"])
+def test_parse_xml_refuses_hostile_xml_in_one_line(tmp_path, text):
+    path = _write(tmp_path, text)
+    with pytest.raises(InputFileError) as caught:
+        parse_xml(path, "robot")
+    message = str(caught.value)
+    assert message.startswith(f"{path}: DOCTYPE/ENTITY declarations are not accepted"), message
+    assert "\n" not in message and "lol" not in message and "root:" not in message, message
+
+
+def test_parse_xml_malformed_wrong_root_and_unreadable(tmp_path):
+    with pytest.raises(InputFileError, match=r"model\.xml: malformed XML at line 2, column \d+: mismatched tag$"):
+        parse_xml(_write(tmp_path, "<mujoco>\n<worldbody></mujoco>", "model.xml"))
+    with pytest.raises(InputFileError, match=r"root element is <mujoco>, expected <robot>$"):
+        parse_xml(_write(tmp_path, "<mujoco/>", "model.xml"), "robot")
+    with pytest.raises(InputFileError, match=r"gone\.urdf: cannot read file"):
+        parse_xml(tmp_path / "gone.urdf")
+    assert parse_xml(_write(tmp_path, _robot(BOX_LINK.format("a"))), "robot").find("link").get("name") == "a"
 
 
 def test_missing_mesh_names_the_mesh_and_link(tmp_path):
