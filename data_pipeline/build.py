@@ -5,6 +5,9 @@ SHA-256 of their id (``split="hash"``) or all to the one split the config names,
 order within a split, and cut into shards of a fixed number of objects. Workers (spawned
 processes, each with its own GL context) build whole shards, so the bytes of a shard never
 depend on the worker count.
+
+An object whose loading or rendering raises is left out, not the build: its shard is written
+with the other objects, and the manifest's ``skipped`` maps its id to the error (one line).
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import json
 import multiprocessing
+import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -21,7 +25,7 @@ from tqdm import tqdm
 from data_pipeline.augment import merge_parts, split_part
 from data_pipeline.samples import SourceObject, derived_rng, object_records, split_of
 from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
-from jax3dc.errors import InputFileError
+from jax3dc.errors import InputFileError, SetupError
 
 
 @dataclass(frozen=True)
@@ -131,28 +135,60 @@ def config_doc(config: BuildConfig) -> dict:
     return doc
 
 
-def build_shard(task: ShardTask, out_dir: str, config: BuildConfig) -> tuple[str, int, str]:
-    """Render every object of ``task`` and write its shard; returns (name, records, sha256)."""
+def spec_records(spec: SourceSpec, split: str, config: BuildConfig):
+    """The records of one source: its views and, with ``config.augment``, its split and merge variants."""
+    objects = load_sources(spec)
+    for obj in objects:
+        yield from object_records(obj, config.views, config.seed, config.size, split=split,
+                                  appearance=config.appearance)
+    if config.augment and spec.kind != "scene":
+        obj = objects[0]
+        rng = derived_rng(config.seed, "augment", obj.object_id)
+        for variant in (split_part(obj, rng), merge_parts(obj, rng)):
+            if variant is not None:
+                yield from object_records(variant, 1, config.seed, config.size, split=split,
+                                          appearance=config.appearance)
+
+
+def error_line(error: BaseException) -> str:
+    """``error`` on one line: its type and message, line breaks (MuJoCo's "Element name ...") joined."""
+    message = " ".join(str(error).split())
+    return f"{type(error).__name__}: {message}" if message else type(error).__name__
+
+
+def build_shard(task: ShardTask, out_dir: str, config: BuildConfig) -> tuple[str, int, str, dict[str, str]]:
+    """Render every object of ``task`` and write its shard; returns (name, records, sha256, skipped).
+
+    An object whose loading or rendering raises is left out whole (none of its records are
+    written) and ``skipped`` maps its id to :func:`error_line` of the error, a plain string, so it
+    crosses the worker pool whatever the error was. A SetupError (the machine, not the object:
+    no OpenGL) still stops the build."""
+    skipped: dict[str, str] = {}
+
     def records():
         for spec in task.sources:
-            objects = load_sources(spec)
-            for obj in objects:
-                yield from object_records(obj, config.views, config.seed, config.size, split=task.split,
-                                          appearance=config.appearance)
-            if config.augment and spec.kind != "scene":
-                obj = objects[0]
-                rng = derived_rng(config.seed, "augment", obj.object_id)
-                for variant in (split_part(obj, rng), merge_parts(obj, rng)):
-                    if variant is not None:
-                        yield from object_records(variant, 1, config.seed, config.size, split=task.split,
-                                                  appearance=config.appearance)
+            try:
+                made = list(spec_records(spec, task.split, config))
+            except SetupError:
+                raise
+            except Exception as error:  # noqa: BLE001  (any failure of one object: leave it out)
+                skipped[spec.object_id] = error_line(error)
+                continue
+            yield from made
 
     count, sha = write_shard(Path(out_dir) / task.name, records())
-    return task.name, count, sha
+    return task.name, count, sha, skipped
 
 
-def _build_star(args: tuple) -> tuple[str, int, str]:
+def _build_star(args: tuple) -> tuple[str, int, str, dict[str, str]]:
     return build_shard(*args)
+
+
+def describe_source(spec: SourceSpec) -> str:
+    """Where an object comes from, for a warning: the imported path, or the factory / scene seed."""
+    if spec.kind == "import":
+        return spec.path
+    return f"{spec.kind} {spec.category} seed {spec.seed}"
 
 
 def _comparable(manifest: dict, wanted: dict) -> dict:
@@ -165,7 +201,9 @@ def _comparable(manifest: dict, wanted: dict) -> dict:
 
 def run_build(out_dir: Path, sources: list[SourceSpec], config: BuildConfig, workers: int,
               progress: bool = True, on_shard: Callable[[str], None] | None = None) -> dict:
-    """Build (or finish) the dataset in ``out_dir``; returns the final manifest."""
+    """Build (or finish) the dataset in ``out_dir``; returns the final manifest. Objects that
+    failed to load or render are in ``manifest["skipped"]`` (id → error) and each got a warning
+    line on stderr."""
     out_dir.mkdir(parents=True, exist_ok=True)
     tasks = plan_shards(sources, config.objects_per_shard, config.split)
     source_text = json.dumps([asdict(s) for s in sources], sort_keys=True).encode("utf-8")
@@ -177,14 +215,22 @@ def run_build(out_dir: Path, sources: list[SourceSpec], config: BuildConfig, wor
     elif _comparable(manifest, wanted) != wanted:
         raise InputFileError(out_dir, "holds a build with other settings or sources; use a new --out directory")
     todo = [t for t in tasks if not finished(out_dir, manifest, t.name)]
+    skipped = manifest.setdefault("skipped", {})
     for t in todo:
         manifest["shards"].pop(t.name, None)
+        for spec in t.sources:
+            skipped.pop(spec.object_id, None)
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), unit="shard", disable=not progress)
     jobs = [(t, str(out_dir), config) for t in todo]
     split_of_task = {t.name: t.split for t in tasks}
+    source_of = {s.object_id: s for t in tasks for s in t.sources}
 
-    def done(result: tuple[str, int, str]) -> None:
-        name, count, sha = result
+    def done(result: tuple[str, int, str, dict[str, str]]) -> None:
+        name, count, sha, skipped_here = result
+        for object_id, message in skipped_here.items():
+            tqdm.write(f"warning: skipped {object_id} ({describe_source(source_of[object_id])}): {message}",
+                       file=sys.stderr)
+        skipped.update(skipped_here)
         manifest["shards"][name] = {"records": count, "sha256": sha, "split": split_of_task[name]}
         save_manifest(out_dir, manifest)
         bar.update(1)

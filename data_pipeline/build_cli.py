@@ -14,7 +14,8 @@ Render procedural objects into ArrayRecord shards of training records (SPEC §4)
 Each object gives --views records: view 0 at rest, later views with one joint moved. Objects are
 split into train/val/test by a hash of their id, never by view. Files in --out:
   train-00000.array_record ...   the shards
-  manifest.json                  settings and the finished shards (records, SHA-256)
+  manifest.json                  settings, the finished shards (records, SHA-256) and the
+                                 objects skipped because they failed to load or render (error)
 If a build is interrupted, run the same command again: finished shards are kept, the rest are
 rebuilt (byte-identical for the same --seed).
 
@@ -29,6 +30,10 @@ By default objects are split into train/val/test by a hash of their folder name,
 `jax3dc data build`; --split train|val|test puts every imported object in that one split (e.g. a
 held-out set of real objects for `jax3dc eval run`). The choice is part of the build's settings:
 resuming into the same --out with another --split is refused.
+
+An object that fails to load or render (a broken file, a mesh MuJoCo refuses) is skipped, not
+the build: a warning line names it and its path, manifest.json lists it under "skipped" with
+its error, and the summary says how many were skipped.
 
 example:  jax3dc data import partnet/door_8877 partnet/microwave_7119 --out data/imported
 example:  jax3dc data import real/* --out data/real_test --split test
@@ -93,9 +98,17 @@ def _run(args: argparse.Namespace, sources: list) -> int:
                          augment=args.augment, split=getattr(args, "split", "hash"),
                          appearance=args.appearance)
     manifest = run_build(args.out, sources, config, args.workers, progress=not args.quiet)
+    total = sum(s["records"] for s in manifest["shards"].values())
+    skipped = len(manifest.get("skipped", {}))
     if not args.quiet:
-        total = sum(s["records"] for s in manifest["shards"].values())
-        print(f"{total} records in {len(manifest['shards'])} shards in {args.out}")
+        summary = f"{total} records in {len(manifest['shards'])} shards in {args.out}"
+        if skipped:
+            summary += f"; {skipped} object{'s' if skipped != 1 else ''} skipped (errors in manifest.json)"
+        print(summary)
+    if skipped and total == 0:
+        from jax3dc.errors import InputFileError
+
+        raise InputFileError(args.out, f"every object was skipped ({skipped}): no records; errors in manifest.json")
     return 0
 
 

@@ -389,6 +389,20 @@ def scene_xml(parts: dict[int, trimesh.Trimesh], rgba: dict[int, tuple[float, ..
             f'{"".join(bodies)}</worldbody></mujoco>')
 
 
+def compile_scene(xml: str) -> mujoco.MjModel:
+    """The model of a scene's MJCF, with MuJoCo's ``balanceinertia`` on.
+
+    The scenes only render (mocap bodies, geoms that collide with nothing), so body inertia is
+    never used, but MuJoCo refuses a body whose inertia derived from its mesh breaks A + B >= C
+    (e.g. a zero-thickness panel, as in some PartNet-Mobility safes). Balancing changes only such
+    bodies, so every scene MuJoCo accepted before compiles to the same model and renders the same
+    bytes. (Not deriving inertia at all, inertiafromgeom="false", would also do, but it changes the
+    model's extent and with it the clip planes, and so pixels of other objects.)"""
+    spec = mujoco.MjSpec.from_string(xml)
+    spec.compiler.balanceinertia = True
+    return spec.compile()
+
+
 def offscreen_renderer(model: mujoco.MjModel, height: int, width: int) -> mujoco.Renderer:
     """``mujoco.Renderer``, or a SetupError that names the OpenGL backend tried and what to install
     (MuJoCo's own message for a missing context speaks of mjr_makeContext, not of the machine)."""
@@ -496,9 +510,9 @@ class PartRenderer:
         self.size = size
         self.appearance = appearance
         if appearance is None:
-            self.model = mujoco.MjModel.from_xml_string(scene_xml(parts, rgba, lighting, size))
+            self.model = compile_scene(scene_xml(parts, rgba, lighting, size))
         else:
-            self.model = mujoco.MjModel.from_xml_string(varied_scene_xml(parts, appearance, size))
+            self.model = compile_scene(varied_scene_xml(parts, appearance, size))
             paint_textures(self.model, appearance)
             self.floor_material = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_MATERIAL, "floor")
             self.rest_vertices = {pid: np.asarray(mesh.vertices, dtype=np.float64) for pid, mesh in parts.items()}
