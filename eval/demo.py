@@ -18,6 +18,7 @@ summary.json lists every stage.
 
 from __future__ import annotations
 
+import itertools
 import json
 import time
 from dataclasses import dataclass
@@ -108,8 +109,10 @@ def _stage_predict(data: Path, out: Path, count: int) -> dict:
     from data_pipeline.shards import shard_paths
     from eval.generation import read_records
 
-    records = read_records(shard_paths([data], "test"), "test")
-    results = [_predict_one(next(records), out / f"object_{k}") for k in range(count)]
+    records = itertools.islice(read_records(shard_paths([data], "test"), "test"), count)
+    results = [_predict_one(record, out / f"object_{k}") for k, record in enumerate(records)]
+    if not results:
+        raise Jax3dcError(f"demo: no test records in {data} to predict")
     status = "done" if all(r["status"] == "done" for r in results) else "partial"
     return {"status": status, "out": str(out), "objects": results}
 
