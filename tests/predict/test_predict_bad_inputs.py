@@ -115,11 +115,13 @@ def test_camera_file_accepts_a_record_meta(tmp_path):
 
 def test_cli_error_is_one_line_and_keeps_outputs(inputs, tmp_path, capsys):
     out = tmp_path / "out"
-    code = main(["predict", str(inputs[0]), "--stage1", f"mesh:{inputs[1]}", "--out", str(out)])
+    missing = tmp_path / "no_model"  # the shipped default would succeed: name a model folder that is not there
+    code = main(["predict", str(inputs[0]), "--stage1", f"mesh:{inputs[1]}", "--structure-model", str(missing),
+                 "--out", str(out)])
     assert code == 1
     captured = capsys.readouterr()
     lines = captured.err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("jax3dc predict: error:") and "--structure-model" in lines[0]
+    assert len(lines) == 1 and lines[0].startswith("jax3dc predict: error:") and str(missing) in lines[0]
     for name in STAGE1_OUTPUTS:
         assert (out / name).exists(), name
         assert str(out / name) in captured.out  # printed where it is
