@@ -9,7 +9,13 @@ as in transformers' ``generate``.
 Sampling: ``temperature == 0`` is greedy (argmax); otherwise logits are divided by the
 temperature, optionally cut to the smallest set of tokens whose probability reaches ``top_p``,
 and sampled. The key for step ``i`` is ``fold_in(key, i)``; a sampled row therefore depends on
-the batch it is in (greedy rows do not).
+the batch it is in (greedy rows do not). ``greedy`` rows (a [B] bool) take the argmax even when
+the config samples, so one batch can hold a greedy answer beside sampled candidates.
+
+``constraint`` (``jax3dc.constrained``): grammar tables and per-row state on the device; each
+step masks the logits to the tokens the grammar allows and advances the rows by the chosen token,
+inside the same loop (no host round trip). ``Generated.logprobs`` is the model's own
+log-likelihood of each row's tokens (unmasked, temperature 1), for ranking candidates.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
+from jax3dc.constrained.structure import Rows, Tables, advance, allowed
 from jax3dc.model.qwen3_vl import KVCache
 from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS
 
@@ -51,11 +58,19 @@ class GenerationConfig:
 
 
 class Generated(NamedTuple):
-    """``tokens [B, max_new_tokens]`` (``pad_id`` after a row's stop token) and ``lengths [B]``:
-    tokens produced per row, the stop token included."""
+    """``tokens [B, max_new_tokens]`` (``pad_id`` after a row's stop token), ``lengths [B]``:
+    tokens produced per row, the stop token included, and ``logprobs [B]``: their summed log-probability."""
 
     tokens: jax.Array
     lengths: jax.Array
+    logprobs: jax.Array
+
+
+class Constraint(NamedTuple):
+    """A grammar on the device: its lifted tables and each row's state (``jax3dc.constrained``)."""
+
+    tables: Tables
+    rows: Rows
 
 
 class Prefilled(NamedTuple):
@@ -86,11 +101,16 @@ def left_pad(prompts: Sequence[Sequence[int]], pad_id: int, multiple: int = 1) -
     return ids, mask
 
 
-def sample_token(logits: jax.Array, key: jax.Array, temperature: float, top_p: float) -> jax.Array:
-    """Next token per row ``[B]`` from ``logits [B, V]`` (temperature and top_p are static)."""
+def sample_token(logits: jax.Array, key: jax.Array, temperature: float, top_p: float,
+                 greedy: jax.Array | None = None) -> jax.Array:
+    """Next token per row ``[B]`` from ``logits [B, V]`` (temperature and top_p are static;
+    ``greedy [B]`` rows take the argmax whatever the temperature)."""
     logits = logits.astype(jnp.float32)
+    best = jnp.argmax(logits, axis=-1).astype(jnp.int32)
     if temperature == 0.0:
-        return jnp.argmax(logits, axis=-1).astype(jnp.int32)
+        return best
+    if greedy is not None:
+        return jnp.where(greedy, best, sample_token(logits, key, temperature, top_p))
     logits = logits / temperature
     if top_p < 1.0:
         ordered = jnp.sort(logits, axis=-1)[:, ::-1]
@@ -111,38 +131,57 @@ def _prefill(graphdef, state, input_ids, attention_mask, pixel_values, image_gri
     return Prefilled(logits, cache, deltas)
 
 
+class _Out(NamedTuple):
+    """What the decode loop writes per row."""
+
+    tokens: jax.Array
+    lengths: jax.Array
+    logprobs: jax.Array
+    done: jax.Array
+
+
 @partial(jax.jit, static_argnames=("graphdef", "config"), donate_argnames=("cache",))
 def _decode(graphdef, state, logits: jax.Array, cache, rope_deltas: jax.Array, key: jax.Array,
-            config: GenerationConfig) -> tuple[Generated, KVCache]:
+            config: GenerationConfig, greedy: jax.Array | None, constraint: Constraint | None) -> tuple[Generated, KVCache]:
     """Returns the final cache too, only so the donated prefill cache can alias it in place."""
     model = nnx.merge(graphdef, state)
     batch = logits.shape[0]
     stop_ids = jnp.asarray(config.stop_ids, jnp.int32)
 
-    def emit(step, logits, tokens, lengths, done):
-        token = sample_token(logits, jax.random.fold_in(key, step), config.temperature, config.top_p)
-        token = jnp.where(done, config.pad_id, token)
-        tokens = tokens.at[:, step].set(token)
-        lengths = lengths + (~done).astype(jnp.int32)
-        return token, tokens, lengths, done | jnp.isin(token, stop_ids)
+    def emit(step, logits, out: _Out, rows):
+        logits = logits.astype(jnp.float32)
+        if rows is not None:
+            mask = allowed(constraint.tables, rows, config.max_new_tokens - step)
+            choose_from = jnp.where(mask, logits, -jnp.inf)
+        else:
+            choose_from = logits
+        token = sample_token(choose_from, jax.random.fold_in(key, step), config.temperature, config.top_p, greedy)
+        token = jnp.where(out.done, config.pad_id, token)
+        if rows is not None:
+            rows = advance(constraint.tables, rows, token, config.max_new_tokens - step)
+        logprob = jnp.take_along_axis(jax.nn.log_softmax(logits, axis=-1), token[:, None], axis=1)[:, 0]
+        out = _Out(out.tokens.at[:, step].set(token), out.lengths + (~out.done).astype(jnp.int32),
+                   out.logprobs + jnp.where(out.done, 0.0, logprob), out.done | jnp.isin(token, stop_ids))
+        return token, out, rows
 
-    tokens = jnp.full((batch, config.max_new_tokens), config.pad_id, jnp.int32)
-    lengths = jnp.zeros((batch,), jnp.int32)
-    token, tokens, lengths, done = emit(0, logits, tokens, lengths, jnp.zeros((batch,), bool))
+    out = _Out(jnp.full((batch, config.max_new_tokens), config.pad_id, jnp.int32), jnp.zeros((batch,), jnp.int32),
+               jnp.zeros((batch,), jnp.float32), jnp.zeros((batch,), bool))
+    rows = None if constraint is None else constraint.rows
+    token, out, rows = emit(0, logits, out, rows)
 
     def cond(carry):
-        step, _, _, _, _, done = carry
-        return (step < config.max_new_tokens) & ~jnp.all(done)
+        step, _, _, out, _ = carry
+        return (step < config.max_new_tokens) & ~jnp.all(out.done)
 
     def body(carry):
-        step, token, cache, tokens, lengths, done = carry
+        step, token, cache, out, rows = carry
         logits, cache = model.decode_step(token, cache, rope_deltas)
-        token, tokens, lengths, done = emit(step, logits, tokens, lengths, done)
-        return step + 1, token, cache, tokens, lengths, done
+        token, out, rows = emit(step, logits, out, rows)
+        return step + 1, token, cache, out, rows
 
-    carry = (jnp.asarray(1, jnp.int32), token, cache, tokens, lengths, done)
-    _, _, cache, tokens, lengths, _ = jax.lax.while_loop(cond, body, carry)
-    return Generated(tokens, lengths), cache
+    carry = (jnp.asarray(1, jnp.int32), token, cache, out, rows)
+    _, _, cache, out, _ = jax.lax.while_loop(cond, body, carry)
+    return Generated(out.tokens, out.lengths, out.logprobs), cache
 
 
 CACHE_MULTIPLE = 128
@@ -175,16 +214,27 @@ def prefill(model, input_ids, attention_mask=None, pixel_values=None, image_grid
 
 
 def decode(model, prefilled: Prefilled, config: GenerationConfig = GenerationConfig(),
-           key: jax.Array | None = None) -> Generated:
-    """Jitted decode loop from a prefilled cache (the cache buffers are donated)."""
+           key: jax.Array | None = None, greedy=None, constraint: Constraint | None = None) -> Generated:
+    """Jitted decode loop from a prefilled cache (the cache buffers are donated); ``greedy [B]``
+    and ``constraint``: see the module docstring."""
     needed = int(prefilled.cache.length) + config.max_new_tokens - 1
     if needed > prefilled.cache.valid.shape[1]:
         raise ValueError(f"cache holds {prefilled.cache.valid.shape[1]} slots, {config.max_new_tokens} new tokens "
                          f"need {needed}: prefill with max_new_tokens >= {config.max_new_tokens}")
     graphdef, state = nnx.split(model)
     key = jax.random.key(0) if key is None else key
-    generated, _ = _decode(graphdef, state, prefilled.logits, prefilled.cache, prefilled.rope_deltas, key, config)
+    greedy = None if greedy is None else jnp.asarray(greedy, bool)
+    generated, _ = _decode(graphdef, state, prefilled.logits, prefilled.cache, prefilled.rope_deltas, key, config,
+                           greedy, constraint)
     return generated
+
+
+def repeat_rows(prefilled: Prefilled, times: int) -> Prefilled:
+    """Each row ``times`` times in a row (candidates of one prompt share its prompt pass)."""
+    rep = lambda x: jnp.repeat(x, times, axis=0)  # noqa: E731
+    cache = prefilled.cache._replace(keys=tuple(rep(k) for k in prefilled.cache.keys),
+                                     values=tuple(rep(v) for v in prefilled.cache.values), valid=rep(prefilled.cache.valid))
+    return Prefilled(rep(prefilled.logits), cache, rep(prefilled.rope_deltas))
 
 
 def split_rows(input_ids: np.ndarray, image_grid_thw: np.ndarray | None, image_token_id: int,
@@ -241,7 +291,7 @@ def prefill_in_chunks(model, input_ids, attention_mask, pixel_values, image_grid
 
 def generate(model, input_ids, attention_mask=None, pixel_values=None, image_grid_thw=None,
              config: GenerationConfig = GenerationConfig(), key: jax.Array | None = None,
-             prefill_rows: int | None = None) -> Generated:
+             prefill_rows: int | None = None, greedy=None, constraint: Constraint | None = None) -> Generated:
     """Generate up to ``config.max_new_tokens`` tokens for each (left-padded) prompt row.
 
     ``pixel_values`` / ``image_grid_thw`` are the image processor's output for all images of
@@ -252,4 +302,4 @@ def generate(model, input_ids, attention_mask=None, pixel_values=None, image_gri
                                       config.max_new_tokens, prefill_rows)
     else:
         prefilled = prefill(model, input_ids, attention_mask, pixel_values, image_grid_thw, config.max_new_tokens)
-    return decode(model, prefilled, config, key)
+    return decode(model, prefilled, config, key, greedy, constraint)

@@ -1,0 +1,39 @@
+"""Grammar-constrained decoding: outputs that always parse and validate against their prompt.
+
+``structure_constraint`` gives the structure grammar (SPEC §2) for a batch of stage-2 prompts:
+their part ids and joint counts set each row's registers; the tables are built once per tokenizer.
+Pass it to ``jax3dc.model.generate.decode(..., constraint=...)``.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Sequence
+
+from jax3dc.constrained.structure import Rows, Tables, initial_rows, structure_tables
+from jax3dc.errors import StructureError
+
+_LEGEND_ID = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \|", re.MULTILINE)
+_JOINTS = re.compile(r"^Joints: (\d+)\s*$", re.MULTILINE)
+
+
+def prompt_counts(prompt: str, where: str = "prompt") -> tuple[int, int]:
+    """(part count N, joint count or -1) of a SPEC §3 prompt, whose legend must list ids 1..N."""
+    ids = [int(m) for m in _LEGEND_ID.findall(prompt)]
+    if not ids:
+        raise StructureError("part_ids", where, "the prompt has no part legend, so no grammar can be set for it")
+    if sorted(ids) != list(range(1, len(ids) + 1)):
+        raise StructureError("part_ids", where, f"legend ids {ids[:8]}{'...' if len(ids) > 8 else ''} are not 1..{len(ids)}")
+    joints = _JOINTS.search(prompt)
+    return len(ids), (int(joints[1]) if joints else -1)
+
+
+def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str]):
+    """The structure grammar for these prompts (one row each), as a ``generate.Constraint``."""
+    from jax3dc.model.generate import Constraint
+
+    counts = [prompt_counts(p, f"prompt {i}") for i, p in enumerate(prompts)]
+    return Constraint(structure_tables(tokenizer, vocab_size), initial_rows([n for n, _ in counts], [j for _, j in counts]))
+
+
+__all__ = ["Rows", "Tables", "prompt_counts", "structure_constraint"]
