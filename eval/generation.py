@@ -7,8 +7,13 @@ through a jitted prefill + the jitted decode loop of ``jax3dc.model.generate``. 
 ``vision_window`` = the largest image's patch count so each image attends only to itself (full
 packed attention over a whole batch of images runs out of memory).
 
-Predictions are appended to ``predictions.jsonl`` batch by batch; a rerun skips the keys already
-there, so a killed run resumes where it stopped.
+Decoding follows ``DecodeOptions``: under the structure grammar (``jax3dc.constrained``) unless
+``constrained`` is off, and with ``candidates`` K > 1 each prompt's prompt pass is repeated into K
+rows: the first greedy, the others sampled (temperature, top-p), all in one batched decode.
+
+Predictions are appended to ``predictions.jsonl`` batch by batch (with K > 1, every candidate and
+its log-likelihood too); a rerun skips the keys already there, so a killed run resumes where it
+stopped.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Sequence
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from PIL import Image
@@ -32,7 +38,8 @@ from data_pipeline.shards import read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.model.chat import encode_chat
-from jax3dc.model.generate import GenerationConfig, decode, left_pad, prefill
+from jax3dc.constrained import structure_constraint
+from jax3dc.model.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
 from jax3dc.model.params import load_pretrained
 from jax3dc.model.processor import ImageProcessorConfig, preprocess_images, smart_resize
 from jax3dc.model.tokenizer import load_tokenizer
@@ -108,6 +115,34 @@ def read_predictions_file(path: Path) -> dict[str, dict[str, Any]]:
 
 
 @dataclass(frozen=True)
+class DecodeOptions:
+    """How predictions are decoded (see the module docstring)."""
+
+    constrained: bool = True
+    candidates: int = 1
+    temperature: float = 0.8  # for the sampled candidates
+    top_p: float = 0.95
+    seed: int = 0
+
+    def __post_init__(self):
+        if self.candidates < 1:
+            raise ValueError(f"candidates must be >= 1, got {self.candidates}")
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One generated candidate."""
+
+    text: str
+    new_tokens: int
+    stopped: bool  # ended on a stop token (not cut at max_new_tokens)
+    logprob: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"text": self.text, "new_tokens": self.new_tokens, "stopped": self.stopped, "logprob": round(self.logprob, 4)}
+
+
+@dataclass(frozen=True)
 class Prompt:
     """One record's prompt ids and what is needed to make its pixels later."""
 
@@ -165,11 +200,12 @@ class Generator:
                            self.config.vision.spatial_merge_size, add_generation_prompt=True)
         return Prompt(record.key, chat.input_ids, record)
 
-    def generate_batch(self, prompts: Sequence[Prompt], batch_size: int, max_new_tokens: int,
-                       bucket: int) -> list[tuple[str, int, bool]]:
-        """(text, tokens generated, ended on a stop token) per prompt; the batch is topped up to ``batch_size`` rows with
-        copies of its last prompt so every full-size batch has the same shape."""
+    def generate_batch(self, prompts: Sequence[Prompt], batch_size: int, max_new_tokens: int, bucket: int,
+                       options: DecodeOptions = DecodeOptions()) -> list[list[Sample]]:
+        """``options.candidates`` samples per prompt (the first greedy); the batch is topped up to
+        ``batch_size`` prompts with copies of its last one so every full batch has the same shape."""
         rows = list(prompts) + [prompts[-1]] * (batch_size - len(prompts))
+        k = options.candidates
         special = self.tokenizer.special
         ids, mask = left_pad([p.input_ids for p in rows], special.endoftext, multiple=bucket)
         processed = [preprocess_images(self.images(p.record), self.processor) for p in rows]
@@ -177,11 +213,24 @@ class Generator:
         grid = np.concatenate([x.image_grid_thw for x in processed])
         window = int(np.prod(grid, axis=1).max())
         prefilled = prefill(self.model, ids, mask, pixels, grid, max_new_tokens, vision_window=window)
-        config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext)
-        out = decode(self.model, prefilled, config)
-        tokens, lengths = np.asarray(out.tokens), np.asarray(out.lengths)
-        return [(self.tokenizer.decode(tokens[i, :lengths[i]].tolist()), int(lengths[i]),
-                 bool(lengths[i]) and int(tokens[i, lengths[i] - 1]) in special.stop_ids) for i in range(len(prompts))]
+        if k > 1:
+            prefilled = repeat_rows(prefilled, k)
+        config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext,
+                                  temperature=options.temperature if k > 1 else 0.0, top_p=options.top_p if k > 1 else 1.0)
+        constraint = None
+        if options.constrained:
+            texts = [p.record.prompt for p in rows for _ in range(k)]
+            constraint = structure_constraint(self.tokenizer, self.config.text.vocab_size, texts)
+        greedy = (np.arange(len(rows) * k) % k == 0) if k > 1 else None
+        out = decode(self.model, prefilled, config, jax.random.key(options.seed), greedy, constraint)
+        tokens, lengths, logprobs = np.asarray(out.tokens), np.asarray(out.lengths), np.asarray(out.logprobs)
+
+        def sample(i: int) -> Sample:
+            n = int(lengths[i])
+            return Sample(self.tokenizer.decode(tokens[i, :n].tolist()), n,
+                          bool(n) and int(tokens[i, n - 1]) in special.stop_ids, float(logprobs[i]))
+
+        return [[sample(r * k + c) for c in range(k)] for r in range(len(prompts))]
 
 
 @dataclass
@@ -202,8 +251,10 @@ class GenerationStats:
 
 
 def generate_predictions(generator: Generator, records: Sequence[Record], out_path: Path, batch_size: int,
-                         max_new_tokens: int, bucket: int = 64) -> tuple[dict[str, str], GenerationStats]:
-    """Key -> raw text for every record, generating only the keys not yet in ``out_path``."""
+                         max_new_tokens: int, bucket: int = 64, options: DecodeOptions = DecodeOptions()
+                         ) -> tuple[dict[str, dict[str, Any]], GenerationStats]:
+    """Key -> prediction line for every record (``text``: the greedy candidate; ``candidates``
+    when there are several), generating only the keys not yet in ``out_path``."""
     done = read_predictions_file(out_path)
     todo = [r for r in records if r.key not in done]
     stats = GenerationStats()
@@ -213,15 +264,17 @@ def generate_predictions(generator: Generator, records: Sequence[Record], out_pa
         with out_path.open("a", encoding="utf-8") as f, tqdm(total=len(prompts), desc="generating", unit="obj") as bar:
             for start in range(0, len(prompts), batch_size):
                 batch = prompts[start:start + batch_size]
-                results = generator.generate_batch(batch, batch_size, max_new_tokens, bucket)
-                for p, (text, n, stopped) in zip(batch, results):
-                    item = {"key": p.key, "text": text, "new_tokens": n, "stopped": stopped}
+                results = generator.generate_batch(batch, batch_size, max_new_tokens, bucket, options)
+                for p, samples in zip(batch, results):
+                    item = {"key": p.key, **samples[0].to_dict()}
+                    if len(samples) > 1:
+                        item["candidates"] = [x.to_dict() for x in samples]
                     f.write(json.dumps(item, separators=(",", ":")) + "\n")
                     done[p.key] = item
                     stats.objects += 1
-                    stats.new_tokens += n
-                    stats.unstopped += not stopped
+                    stats.new_tokens += sum(x.new_tokens for x in samples)
+                    stats.unstopped += sum(not x.stopped for x in samples)
                 f.flush()
                 bar.update(len(batch))
         stats.seconds = time.perf_counter() - start_time
-    return {r.key: done[r.key]["text"] for r in records}, stats
+    return {r.key: done[r.key] for r in records}, stats

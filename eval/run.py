@@ -4,15 +4,21 @@ score them and write a report folder.
 Three sources of predictions: the checkpoint (batched jitted generation, resumable through
 predictions.jsonl), ``--predictions FILE`` (score lines made elsewhere), or
 ``--reference-as-prediction`` (each record's own target: a sanity run that must score 100).
+
+Generation is grammar-constrained unless ``--unconstrained``. With ``--candidates K`` > 1 or
+``--repair``, a verification stage follows (``eval.verified.stage``): the physics verdict picks
+among the K candidates and repairs the winner's flagged joints; verified.jsonl says which won,
+why, and what was repaired, and its structures are the ones scored.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 from pathlib import Path
 
-from jax3dc.cli import positive_int
+from jax3dc.cli import positive_int, positive_float
 from jax3dc.errors import InputFileError, Jax3dcError
 
 ALL_SPLITS = "all"  # --split value that reads every shard and keeps every record
@@ -33,7 +39,7 @@ def run_eval(args: argparse.Namespace) -> int:
 
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
     from data_pipeline.shards import shard_paths
-    from eval.generation import Generator, generate_predictions, read_records, reference_of
+    from eval.generation import DecodeOptions, Generator, generate_predictions, read_records, reference_of
     from eval.metrics.cases import build_cases, load_predictions
     from eval.metrics.tables import format_tables
     from eval.report import write_report
@@ -71,14 +77,26 @@ def run_eval(args: argparse.Namespace) -> int:
         preds, name = {r.key: r.target for r in records}, "reference"
     else:
         generator = Generator.load(args.checkpoint, dtype=args.dtype)
-        preds, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
-                                            args.max_new_tokens, args.bucket)
-        notes.append(stats.summary())
+        options = DecodeOptions(constrained=not args.unconstrained, candidates=args.candidates,
+                                temperature=args.temperature, top_p=args.top_p, seed=args.seed)
+        lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
+                                            args.max_new_tokens, args.bucket, options)
+        notes.append(("constrained" if options.constrained else "unconstrained") + f" decoding, {options.candidates} "
+                     f"candidate(s) per object; " + stats.summary())
         print(notes[-1])
+        preds = {key: line["text"] for key, line in lines.items()}
         name = Path(args.checkpoint).name
+        if args.candidates > 1 or args.repair:
+            from eval.verified.stage import verify_predictions
+
+            sources = {p.name: p for folder in args.sources for p in Path(folder).iterdir() if p.is_dir()}
+            preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair, sources)
+            notes.append(verified.summary())
+            print(notes[-1])
     extra = {"references.jsonl": "references.jsonl"}
-    if (out / "predictions.jsonl").exists():
-        extra["predictions.jsonl"] = "predictions.jsonl"
+    for produced in ("predictions.jsonl", "verified.jsonl"):
+        if (out / produced).exists():
+            extra[produced] = produced
     evaluation = write_report(out, name, build_cases(refs, preds), by_key, {r.key: r for r in refs},
                               args.overlays, extra, notes)
     print(format_tables([(name, evaluation.metrics)]))
@@ -122,4 +140,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="prompt lengths are padded to a multiple of this, limiting recompiles (default 64)")
     run.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"), help="parameter dtype (default bfloat16)")
     run.add_argument("--overlays", type=int, default=16, help="joint overlays for the first N records (default 16)")
+    run.add_argument("--unconstrained", action="store_true",
+                     help="decode without the structure grammar (default: every output parses against its legend)")
+    run.add_argument("--candidates", type=positive_int, default=1,
+                     help="K: candidates per object from one batched decode, the first greedy, the rest sampled; "
+                     "K > 1 lets the physics verdict choose (C MuJoCo, --workers processes). Default 1")
+    run.add_argument("--repair", action="store_true",
+                     help="try alternatives for the winner's flagged joints (axis flipped, pivot where child meets "
+                     "parent, hinge/slide) and keep one only when the verdict improves; listed in verified.jsonl")
+    run.add_argument("--temperature", type=positive_float, default=0.8, help="sampling temperature of candidates 2..K (default 0.8)")
+    run.add_argument("--top-p", type=positive_float, default=0.95, help="nucleus of candidates 2..K (default 0.95)")
+    run.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    run.add_argument("--workers", type=positive_int, default=max(1, (os.cpu_count() or 1)),
+                     help="processes for the physics verdicts (default: one per core)")
+    run.add_argument("--sources", nargs="*", default=[], metavar="FOLDER",
+                     help="folders holding the source objects of imported records (their part meshes for the "
+                     "physics verdict), e.g. the PartNet-Mobility folders given to data import")
     run.set_defaults(func=run_eval)
