@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from eval.predict.models import DEFAULT_MAX_NEW_TOKENS
+from jax3dc.cli import positive_int
 from jax3dc.release import default_structure_model
 
 DESCRIPTION = """\
@@ -47,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
 
     result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
                      scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
+                     constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
                      on_output=show, progress=True)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
@@ -77,6 +79,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="up axis of the --stage1 mesh file: z (this project's frame, +Z up, front -Y; what "
                         "jax3dc exports write; the default) or y (glTF's convention, +Y up, front +Z, e.g. Blender's "
                         "glTF exporter)")
+    p.add_argument("--unconstrained", action="store_true",
+                   help="decode the structure without its grammar (default: the output always parses)")
+    p.add_argument("--candidates", type=positive_int, default=1, metavar="K",
+                   help="K structures from one decode (the first greedy, the rest sampled); the physics verdict "
+                   "chooses, candidates.json says which and why (default 1)")
+    p.add_argument("--repair", action="store_true",
+                   help="move the pivot of each hinge the physics check flags to where child and parent meet, "
+                   "kept only when the verdict improves; repairs.json lists them")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
                    help="model compute dtype (float32 on CPU is slower but exact)")
     p.set_defaults(func=run)

@@ -25,12 +25,17 @@ TextModel = Callable[[str], str]
 DEFAULT_MAX_NEW_TOKENS = 2048
 
 
-def generate_text(generator: "Generator", images: Sequence[Image.Image], messages: list[dict],
-                  max_new_tokens: int) -> str:
-    """The model's reply (greedy, without the end-of-turn token) to one chat whose image items are
-    ``images``, in order."""
+def generate_texts(generator: "Generator", images: Sequence[Image.Image], messages: list[dict], max_new_tokens: int,
+                   grammar_prompt: str | None = None, candidates: int = 1, temperature: float = 0.8,
+                   top_p: float = 0.95, seed: int = 0) -> list[tuple[str, float]]:
+    """The model's replies (without the end-of-turn token) and their log-likelihoods to one chat
+    whose image items are ``images``, in order: ``candidates`` rows of one decode, the first greedy,
+    the others sampled; under the structure grammar of ``grammar_prompt`` when it is given."""
+    import jax
+
+    from jax3dc.constrained import structure_constraint
     from jax3dc.model.chat import encode_chat
-    from jax3dc.model.generate import GenerationConfig, decode, prefill  # jax: imported only to generate
+    from jax3dc.model.generate import GenerationConfig, decode, prefill, repeat_rows  # jax: imported only to generate
     from jax3dc.model.processor import preprocess_images
 
     processed = preprocess_images(list(images), generator.processor)
@@ -41,17 +46,43 @@ def generate_text(generator: "Generator", images: Sequence[Image.Image], message
     prefilled = prefill(generator.model, ids, np.ones_like(ids), processed.pixel_values, processed.image_grid_thw,
                         max_new_tokens, vision_window=window)
     special = generator.tokenizer.special
-    config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext)
-    out = decode(generator.model, prefilled, config)
-    tokens = np.asarray(out.tokens)[0, :int(np.asarray(out.lengths)[0])].tolist()
-    if tokens and tokens[-1] in special.stop_ids:
-        tokens = tokens[:-1]  # the end-of-turn marker is not part of the reply (a program would not parse)
-    return generator.tokenizer.decode(tokens)
+    sampled = candidates > 1
+    if sampled:
+        prefilled = repeat_rows(prefilled, candidates)
+    config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext,
+                              temperature=temperature if sampled else 0.0, top_p=top_p if sampled else 1.0)
+    constraint = None if grammar_prompt is None else structure_constraint(
+        generator.tokenizer, generator.config.text.vocab_size, [grammar_prompt] * candidates)
+    greedy = np.arange(candidates) == 0 if sampled else None
+    out = decode(generator.model, prefilled, config, jax.random.key(seed), greedy, constraint)
+    replies = []
+    for row in range(candidates):
+        tokens = np.asarray(out.tokens)[row, :int(np.asarray(out.lengths)[row])].tolist()
+        if tokens and tokens[-1] in special.stop_ids:
+            tokens = tokens[:-1]  # the end-of-turn marker is not part of the reply (a program would not parse)
+        replies.append((generator.tokenizer.decode(tokens), float(np.asarray(out.logprobs)[row])))
+    return replies
 
 
-def structure_model(generator: "Generator", image: Image.Image, seg: Image.Image, max_new_tokens: int) -> TextModel:
-    """Stage 2 (f_str): reads (I, S, prompt) and writes the structure JSON."""
-    return lambda prompt: generate_text(generator, [image, seg], chat_messages(prompt), max_new_tokens)
+def generate_text(generator: "Generator", images: Sequence[Image.Image], messages: list[dict],
+                  max_new_tokens: int) -> str:
+    """The model's greedy, unconstrained reply (the code model's part program)."""
+    return generate_texts(generator, images, messages, max_new_tokens)[0][0]
+
+
+def structure_model(generator: "Generator", image: Image.Image, seg: Image.Image, max_new_tokens: int,
+                    constrained: bool = True) -> TextModel:
+    """Stage 2 (f_str): reads (I, S, prompt) and writes the structure JSON (greedy; under the
+    structure grammar of the prompt unless ``constrained`` is off)."""
+    return lambda prompt: generate_texts(generator, [image, seg], chat_messages(prompt), max_new_tokens,
+                                         prompt if constrained else None)[0][0]
+
+
+def structure_candidates(generator: "Generator", image: Image.Image, seg: Image.Image, max_new_tokens: int,
+                         candidates: int, constrained: bool = True) -> Callable[[str], list[tuple[str, float]]]:
+    """Stage 2 with ``candidates`` answers per prompt (text, log-likelihood), the first greedy."""
+    return lambda prompt: generate_texts(generator, [image, seg], chat_messages(prompt), max_new_tokens,
+                                         prompt if constrained else None, candidates)
 
 
 def code_model(generator: "Generator", image: Image.Image, max_new_tokens: int) -> TextModel:

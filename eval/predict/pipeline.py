@@ -20,6 +20,7 @@ to stand in for a checkpoint (tests do; so can a caller with its own model serve
 from __future__ import annotations
 
 import hashlib
+import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
@@ -30,7 +31,7 @@ from tqdm import tqdm
 
 from data_pipeline.render import Camera, png_bytes
 from eval.metrics.cases import json_text
-from eval.predict.models import DEFAULT_MAX_NEW_TOKENS, TextModel, code_model, structure_model
+from eval.predict.models import DEFAULT_MAX_NEW_TOKENS, TextModel, code_model, structure_candidates, structure_model
 from eval.predict.outputs import write_exports, write_physics
 from eval.predict.report import ReportInputs, write_report
 from eval.predict.segmentation import default_camera, render_segmentation
@@ -111,11 +112,38 @@ def program_text(image: Image.Image, code_model_dir: str | Path | None, generate
     return generate_program(CODE_PROMPT)
 
 
+def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: float, out: Path, wrote) -> str:
+    """The candidate the physics verdict prefers; candidates.json holds every one's row and the reason."""
+    from eval.verified.select import Candidate, choose
+
+    candidates = [Candidate(text, logprob) for text, logprob in replies]
+    choice = choose(candidates, parts.keys(), parts, metres, False, boxes)
+    rows = [{"parsed": r.parsed, "rule": r.rule, "physics_ok": r.ok, "flagged_joints": r.flagged, "logprob": round(r.logprob, 4),
+             "text": c.text} for r, c in zip(choice.rows, candidates)]
+    doc = {"winner": choice.index, "reason": choice.reason, "candidates": rows}
+    (out / "candidates.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    wrote("candidates", out / "candidates.json")
+    return candidates[choice.index].text
+
+
+def _repaired(structure: Structure, parts: dict, boxes: dict, metres: float, out: Path, wrote) -> Structure:
+    """``structure`` with flagged hinges repaired where the verdict improves; repairs.json lists them."""
+    from eval.verified.repair import repair
+    from jax3dc.structure.serialize import joint_to_dict
+
+    fixed = repair(structure, parts, metres, False, boxes)
+    doc = [{"part": r.part, "kind": r.kind, "before": joint_to_dict(r.before), "after": joint_to_dict(r.after),
+            "reason": r.reason} for r in fixed.repairs]
+    (out / "repairs.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    wrote("repairs", out / "repairs.json")
+    return fixed.structure
+
+
 def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
             code_model_dir: str | Path | None = None, out: str | Path = "prediction", camera: Camera | None = None,
             generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
-            dtype: str = "bfloat16",
+            dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
             on_output: OutputListener | None = None, progress: bool = False) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
@@ -126,6 +154,10 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
     file's units per nu, assumed metres; 1.0 for the code backend, whose programs are in nu).
     ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
+    ``constrained``: decode under the structure grammar (always parses). ``candidates`` K > 1: K
+    answers from one decode (the first greedy), chosen by the physics verdict (candidates.json says
+    which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
+    (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
@@ -178,13 +210,20 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
         error: Jax3dcError | None = None
         try:
             step("structure model")
+            metres = scale if scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
             if generate_structure is None:
                 if structure_model_dir is None:
                     raise InputFileError("--structure-model",
                                          "a structure model checkpoint (--structure-model DIR) is needed")
-                generate_structure = structure_model(checkpoints.get(structure_model_dir), rgb,
-                                                     Image.fromarray(seg), max_new_tokens)
-            result.raw_text = generate_structure(result.prompt)
+                generator = checkpoints.get(structure_model_dir)
+                if candidates > 1:
+                    replies = structure_candidates(generator, rgb, Image.fromarray(seg), max_new_tokens, candidates,
+                                                   constrained)(result.prompt)
+                    result.raw_text = _chosen(replies, parts_in.parts, boxes, metres, out, wrote)
+                else:
+                    generate_structure = structure_model(generator, rgb, Image.fromarray(seg), max_new_tokens, constrained)
+            if result.raw_text is None:
+                result.raw_text = generate_structure(result.prompt)
             try:
                 parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
             except StructureError as e:
@@ -194,12 +233,13 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
                                      f"{out / 'structure_raw.txt'})") from None
             step("exports")
             structure = canonicalize(parsed, boxes)
+            if repair:
+                structure = _repaired(structure, parts_in.parts, boxes, metres, out, wrote)
             (out / "structure.json").write_text(to_json(structure), encoding="utf-8")
             wrote("structure", out / "structure.json")
             result.structure = structure
             named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
                                               for pid, n in structure.nodes.items()})
-            metres = scale if scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
             for name, path in write_exports(named, parts_in.parts, out, metres).items():
                 wrote(name, path)
             step("physics")

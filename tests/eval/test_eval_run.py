@@ -235,7 +235,7 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
     import jax
 
     from data_pipeline.shards import shard_paths
-    from eval.generation import Generator, read_records
+    from eval.generation import DecodeOptions, Generator, read_records
     from jax3dc.model.generate import GenerationConfig, generate
     from jax3dc.model.processor import preprocess_images
 
@@ -243,10 +243,12 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
     records = list(read_records(shard_paths([shards], "test"), "test"))
     prompts = [generator.prompt(r) for r in records]
     with jax.default_matmul_precision("highest"):
-        batched = generator.generate_batch(prompts[:2], 3, max_new_tokens=4, bucket=32)
+        batched = generator.generate_batch(prompts[:2], 3, max_new_tokens=4, bucket=32,
+                                           options=DecodeOptions(constrained=False))
         special = generator.tokenizer.special
         config = GenerationConfig(max_new_tokens=4, stop_ids=special.stop_ids, pad_id=special.endoftext)
-        for prompt, (text, n, _) in zip(prompts[:2], batched):
+        for prompt, (sample,) in zip(prompts[:2], batched):
+            text, n = sample.text, sample.new_tokens
             images = preprocess_images(generator.images(prompt.record), generator.processor)
             alone = generate(generator.model, prompt.input_ids[None], None, images.pixel_values, images.image_grid_thw,
                              config=config)

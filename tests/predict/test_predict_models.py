@@ -35,16 +35,16 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
     import jax
 
     from data_pipeline.record import Record
-    from eval.generation import Generator
+    from eval.generation import DecodeOptions, Generator
     from eval.predict.models import generate_text
     from eval.predict.pipeline import predict
     from jax3dc.errors import StructureError
     from jax3dc.prompt import chat_messages
 
     out = tmp_path / "out"
-    with pytest.raises(StructureError):  # a random model does not write a valid structure
+    with pytest.raises(StructureError):  # a random model, unconstrained, does not write a valid structure
         predict(inputs[0], f"mesh:{inputs[1]}", checkpoint, out=out, camera=CAMERA,
-                max_new_tokens=MAX_NEW_TOKENS, dtype="float32")
+                max_new_tokens=MAX_NEW_TOKENS, dtype="float32", constrained=False)
     raw = (out / "structure_raw.txt").read_text()
     assert (out / "report.html").exists() and not (out / "structure.json").exists()
 
@@ -54,7 +54,8 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
     with jax.default_matmul_precision("highest"):
         alone = generate_text(generator, [image, seg], chat_messages(text), MAX_NEW_TOKENS)
         record = Record("x", inputs[0].read_bytes(), (out / "seg.png").read_bytes(), text, "")
-        batched = generator.generate_batch([generator.prompt(record)], 1, MAX_NEW_TOKENS, bucket=1)[0][0]
+        batched = generator.generate_batch([generator.prompt(record)], 1, MAX_NEW_TOKENS, bucket=1,
+                                           options=DecodeOptions(constrained=False))[0][0].text
     assert alone == raw
     assert batched in (alone, alone + "<|im_end|>", alone + "<|endoftext|>")  # eval keeps the stop token
 

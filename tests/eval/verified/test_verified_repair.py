@@ -2,15 +2,15 @@
 
 import pytest
 
-from eval.verified.repair import FLIPPED, PIVOT, SWAPPED, alternatives, pivot_lines, repair
+from eval.verified.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, alternatives, pivot_lines, repair
 from tests.eval.verified.verified_cases import checked_object, flipped, pivot_moved_away
 
 BOX = "storage_box/storage_box_000001/0"
 MICROWAVE = "microwave/microwave_000001/0"
 
 
-def run(obj, structure):
-    return repair(structure, obj.parts, obj.scale, obj.mounted, obj.boxes)
+def run(obj, structure, kinds=ALL_KINDS):
+    return repair(structure, obj.parts, obj.scale, obj.mounted, obj.boxes, kinds=kinds)
 
 
 @pytest.fixture
@@ -26,6 +26,16 @@ def test_a_flipped_lid_is_flipped_back(box):
     assert (fix.part, fix.kind) == (2, FLIPPED)
     assert fix.before == flipped(box.target, 2).nodes[2].joint and fix.after == box.target.nodes[2].joint
     assert fix.reason == "flagged joints 1 -> 0; object passes"
+
+
+def test_by_default_only_pivots_move(box):
+    """Flips and type swaps are measured to undo right joints the verdict flags (repair.DEFAULT_KINDS),
+    so the default leaves a flipped lid as it is, and the lid's pivot still gets repaired."""
+    out = repair(flipped(box.target, 2), box.parts, box.scale, box.mounted, box.boxes)
+    assert all(fix.kind == PIVOT for fix in out.repairs)
+    assert out.structure.nodes[2].joint.range == flipped(box.target, 2).nodes[2].joint.range
+    moved = repair(pivot_moved_away(box.target, 2), box.parts, box.scale, box.mounted, box.boxes)
+    assert moved.after["ok"] and [fix.kind for fix in moved.repairs] == [PIVOT]
 
 
 def test_a_detached_pivot_is_moved_onto_the_lid_edge(box):
