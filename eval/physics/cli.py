@@ -107,6 +107,12 @@ def run_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def record_scale(meta: dict[str, Any]) -> float:
+    """Metres per nu of a record: ``scale_m_per_nu`` as the data build writes it (an older or
+    hand-made meta may say ``scale``), else 1."""
+    return float(meta.get("scale_m_per_nu", meta.get("scale", 1.0)))
+
+
 def run_sweep(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -127,7 +133,7 @@ def run_sweep(args: argparse.Namespace) -> int:
     for object_id, record in chosen.items():
         category = record.meta.get("category")
         mounted = category in FACTORIES and FACTORIES[category].mounted
-        jobs.append(_SweepJob(object_id, category, record.program, record.target, float(record.meta.get("scale", 1.0)),
+        jobs.append(_SweepJob(object_id, category, record.program, record.target, record_scale(record.meta),
                               mounted, threads, args.out))
     with contextlib.ExitStack() as stack:
         if args.workers > 1:  # spawned: a forked child would inherit the loader's threads and locks

@@ -103,6 +103,14 @@ def _sweep_build(tmp_path):
     return tmp_path
 
 
+def test_sweep_reads_the_scale_the_data_build_writes():
+    from eval.physics.cli import record_scale
+
+    assert record_scale({"scale_m_per_nu": 0.32, "object_id": "kettle_1"}) == 0.32
+    assert record_scale({"scale": 1.5}) == 1.5
+    assert record_scale({}) == 1.0
+
+
 def test_cli_sweep_writes_report(tmp_path):
     build = _sweep_build(tmp_path / "build")
     out = tmp_path / "report"
