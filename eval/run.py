@@ -112,7 +112,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run = subparsers.add_parser(
         "run",
         help="generate over a test split, score, write a report folder",
-        description="Generate a structure for every record of a split (batched, jitted, greedy), parse "
+        description="Generate a structure for every record of a split (batched, jitted, greedy, under the "
+        "structure grammar unless --unconstrained; --candidates K / --repair add the physics-verified choice), parse "
         "and score the generations against the records' targets (SPEC §5), and write a report folder: "
         "metrics.json, per_object.jsonl, tables.md, per_category.md, failure_attribution.png, "
         "overlays/<key>.png (reference joints green, predicted red, drawn with the record's "
