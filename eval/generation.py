@@ -220,7 +220,8 @@ class Generator:
         constraint = None
         if options.constrained:
             texts = [p.record.prompt for p in rows for _ in range(k)]
-            constraint = structure_constraint(self.tokenizer, self.config.text.vocab_size, texts)
+            constraint = structure_constraint(self.tokenizer, self.config.text.vocab_size, texts,
+                                              [p.key for p in rows for _ in range(k)])
         greedy = (np.arange(len(rows) * k) % k == 0) if k > 1 else None
         out = decode(self.model, prefilled, config, jax.random.key(options.seed), greedy, constraint)
         tokens, lengths, logprobs = np.asarray(out.tokens), np.asarray(out.lengths), np.asarray(out.logprobs)

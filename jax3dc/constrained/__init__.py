@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 from typing import Sequence
 
-from jax3dc.constrained.structure import Rows, Tables, initial_rows, structure_tables
+from jax3dc.constrained.structure import ID_LIMIT, Rows, Tables, initial_rows, structure_tables
 from jax3dc.errors import StructureError
 
 _LEGEND_ID = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \|", re.MULTILINE)
@@ -28,11 +28,17 @@ def prompt_counts(prompt: str, where: str = "prompt") -> tuple[int, int]:
     return len(ids), (int(joints[1]) if joints else -1)
 
 
-def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str]):
-    """The structure grammar for these prompts (one row each), as a ``generate.Constraint``."""
+def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], names: Sequence[str] | None = None):
+    """The structure grammar for these prompts (one row each), as a ``generate.Constraint``;
+    ``names`` (e.g. record keys) say which prompt an error is about."""
     from jax3dc.model.generate import Constraint
 
-    counts = [prompt_counts(p, f"prompt {i}") for i, p in enumerate(prompts)]
+    names = list(names) if names is not None else [f"prompt {i}" for i in range(len(prompts))]
+    counts = [prompt_counts(p, name) for p, name in zip(prompts, names)]
+    for (n, _), name in zip(counts, names):
+        if n >= ID_LIMIT:
+            raise StructureError("part_ids", name, f"{n} parts: the structure grammar takes at most {ID_LIMIT - 1} "
+                                 "(decode this object with --unconstrained)")
     return Constraint(structure_tables(tokenizer, vocab_size), initial_rows([n for n, _ in counts], [j for _, j in counts]))
 
 

@@ -94,6 +94,14 @@ def test_prompt_counts_reads_the_legend_and_joint_line() -> None:
         prompt_counts("Write the structure.")
 
 
+def test_a_prompt_the_grammar_cannot_take_is_an_error_naming_it() -> None:
+    tokenizer = load_tokenizer(MODEL_DIR)
+    with pytest.raises(StructureError, match=r"cabinet/7/0: 130 parts: the structure grammar takes at most 127"):
+        structure_constraint(tokenizer, 1408, [_prompt(2, 1), _prompt(130, None)], ["box/1/0", "cabinet/7/0"])
+    with pytest.raises(StructureError, match=r"box/1/0: the prompt has no part legend"):
+        structure_constraint(tokenizer, 1408, ["Write the structure."], ["box/1/0"])
+
+
 def test_random_tiny_model_always_writes_valid_structures() -> None:
     """Sampled at temperature 1 from random weights (the hardest case for a grammar: nothing
     steers it but the mask), every row parses, has exactly its prompt's part ids and, where the
