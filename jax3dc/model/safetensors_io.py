@@ -1,62 +1,22 @@
-"""Minimal safetensors reading (memory-mapped, lazy per tensor) and writing.
+"""Checkpoint tensors through the ``safetensors`` library (numpy backend), one tensor at a time.
 
-Own reader because checkpoints are bfloat16, which the ``safetensors`` numpy backend cannot
-return, and because loading must stream one tensor at a time without materialising a file.
-Format: 8-byte little-endian header length, a JSON header ``{name: {dtype, shape,
-data_offsets}}``, then the raw little-endian bytes.
+``ml_dtypes`` is imported first: it registers numpy's ``bfloat16``, which is how the library's
+numpy backend reads and writes the bf16 tensors our checkpoints hold. Loading streams tensor by
+tensor, so a 4B checkpoint never sits in memory twice.
 """
 
 from __future__ import annotations
 
 import json
-import struct
 from collections.abc import Iterator
 from pathlib import Path
 
-import ml_dtypes
+import ml_dtypes  # noqa: F401  (registers numpy's bfloat16 for the safetensors numpy backend)
 import numpy as np
+import safetensors.numpy
+from safetensors import SafetensorError, safe_open
 
 from jax3dc.errors import InputFileError
-
-DTYPES = {
-    "F64": np.dtype(np.float64), "F32": np.dtype(np.float32), "F16": np.dtype(np.float16),
-    "BF16": np.dtype(ml_dtypes.bfloat16), "I64": np.dtype(np.int64), "I32": np.dtype(np.int32),
-    "I16": np.dtype(np.int16), "I8": np.dtype(np.int8), "U8": np.dtype(np.uint8), "BOOL": np.dtype(bool),
-}
-NAMES = {v: k for k, v in DTYPES.items()}
-
-
-class SafetensorsFile:
-    """``names()`` and ``get(name) -> np.ndarray`` (a read-only memory map, no copy)."""
-
-    def __init__(self, path: str | Path):
-        self.path = Path(path)
-        try:
-            with open(self.path, "rb") as f:
-                (n,) = struct.unpack("<Q", f.read(8))
-                header = json.loads(f.read(n))
-        except (OSError, struct.error, json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise InputFileError(str(path), f"not a readable safetensors file ({e})") from None
-        header.pop("__metadata__", None)
-        self.header = header
-        self.data_start = 8 + n
-
-    def names(self) -> list[str]:
-        return list(self.header)
-
-    def get(self, name: str) -> np.ndarray:
-        entry = self.header[name]
-        if entry["dtype"] not in DTYPES:
-            raise InputFileError(str(self.path), f"tensor {name}: unsupported dtype {entry['dtype']}")
-        dtype = DTYPES[entry["dtype"]]
-        begin, end = entry["data_offsets"]
-        shape = tuple(entry["shape"])
-        if end - begin != dtype.itemsize * int(np.prod(shape)):
-            raise InputFileError(str(self.path), f"tensor {name}: byte size does not match its shape")
-        if end == begin:
-            return np.zeros(shape, dtype)
-        raw = np.memmap(self.path, dtype=np.uint8, mode="r", offset=self.data_start + begin, shape=(end - begin,))
-        return raw.view(dtype).reshape(shape)
 
 
 def checkpoint_files(directory: str | Path) -> list[Path]:
@@ -79,26 +39,27 @@ def checkpoint_files(directory: str | Path) -> list[Path]:
     return files
 
 
+def tensor_names(path: str | Path) -> list[str]:
+    """The tensor names of one safetensors file."""
+    try:
+        with safe_open(str(path), framework="numpy") as f:
+            return list(f.keys())
+    except (SafetensorError, OSError) as e:
+        raise InputFileError(str(path), f"not a readable safetensors file ({e})") from None
+
+
 def iter_tensors(directory: str | Path) -> Iterator[tuple[str, np.ndarray]]:
-    for f in checkpoint_files(directory):
-        st = SafetensorsFile(f)
-        for name in st.names():
-            yield name, st.get(name)
+    """(name, array) of every tensor of a checkpoint directory, one at a time."""
+    for path in checkpoint_files(directory):
+        try:
+            with safe_open(str(path), framework="numpy") as f:
+                for name in f.keys():
+                    yield name, f.get_tensor(name)
+        except (SafetensorError, OSError, TypeError) as e:  # TypeError: a dtype numpy cannot hold
+            raise InputFileError(str(path), f"not a readable safetensors file ({e})") from None
 
 
 def write_safetensors(path: str | Path, tensors: dict[str, np.ndarray]) -> None:
-    header: dict = {"__metadata__": {"format": "pt"}}
-    offset = 0
-    for name, arr in tensors.items():
-        if arr.dtype not in NAMES:
-            raise ValueError(f"{name}: dtype {arr.dtype} cannot be written to safetensors")
-        header[name] = {"dtype": NAMES[arr.dtype], "shape": list(arr.shape),
-                        "data_offsets": [offset, offset + arr.nbytes]}
-        offset += arr.nbytes
-    blob = json.dumps(header, separators=(",", ":")).encode()
-    blob += b" " * (-len(blob) % 8)
-    with open(path, "wb") as f:
-        f.write(struct.pack("<Q", len(blob)))
-        f.write(blob)
-        for arr in tensors.values():
-            f.write(np.ascontiguousarray(arr).tobytes())
+    """One safetensors file, with the metadata transformers expects of a PyTorch-format checkpoint."""
+    safetensors.numpy.save_file({k: np.ascontiguousarray(v) for k, v in tensors.items()}, str(path),
+                                metadata={"format": "pt"})

@@ -16,7 +16,7 @@ from flax import nnx
 from jax3dc.errors import InputFileError
 from jax3dc.model import Qwen3VL, Qwen3VLConfig, load_pretrained, save_pretrained
 from jax3dc.model.params import PARAM_TABLE, hf_to_ours_name
-from jax3dc.model.safetensors_io import SafetensorsFile, write_safetensors
+from jax3dc.model.safetensors_io import iter_tensors, tensor_names, write_safetensors
 from jax3dc.sharding import make_mesh
 
 
@@ -36,7 +36,7 @@ def saved(tmp_path_factory):
 
 def test_round_trip_is_exact_and_every_name_is_in_the_table(saved):
     model, cfg, path = saved
-    names = SafetensorsFile(path / "model.safetensors").names()
+    names = tensor_names(path / "model.safetensors")
     assert all(hf_to_ours_name(n) is not None for n in names)
     assert "lm_head.weight" in names and not cfg.tie_word_embeddings
     back, cfg2 = load_pretrained(path)
@@ -73,8 +73,7 @@ def test_bfloat16_checkpoint_loads_as_rounded_float32(saved, tmp_path):
 
 def _rewrite(src, dst, edit):
     shutil.copytree(src, dst)
-    f = SafetensorsFile(src / "model.safetensors")
-    tensors = {n: np.array(f.get(n)) for n in f.names()}
+    tensors = dict(iter_tensors(src))
     edit(tensors)
     write_safetensors(dst / "model.safetensors", tensors)
 
@@ -123,7 +122,7 @@ def test_tied_embeddings_match_transformers_and_save_without_lm_head(tmp_path):
         ref = hf(input_ids=torch.tensor(ids)).logits.numpy()
     assert np.abs(ours - ref).max() / np.abs(ref).max() < 1e-4
     save_pretrained(model, cfg, tmp_path / "ours")
-    assert "lm_head.weight" not in SafetensorsFile(tmp_path / "ours" / "model.safetensors").names()
+    assert "lm_head.weight" not in tensor_names(tmp_path / "ours" / "model.safetensors")
     back = transformers.Qwen3VLForConditionalGeneration.from_pretrained(tmp_path / "ours")
     np.testing.assert_array_equal(back.lm_head.weight.detach().numpy(),
                                   hf.model.language_model.embed_tokens.weight.detach().numpy())
@@ -149,3 +148,11 @@ def test_bfloat16_compute_with_float32_parameters(saved):
     assert b.dtype == jnp.bfloat16
     err = np.abs(a - np.asarray(b, np.float32)).max() / np.abs(a).max()
     assert 0 < err < 3e-2, err  # bf16 rounding shows, but stays small
+
+
+def test_a_file_that_is_not_safetensors_is_an_input_error_naming_it(tmp_path):
+    (tmp_path / "model.safetensors").write_bytes(b"not a checkpoint")
+    with pytest.raises(InputFileError, match=r"model\.safetensors.*not a readable safetensors file"):
+        dict(iter_tensors(tmp_path))
+    with pytest.raises(InputFileError, match="not a readable safetensors file"):
+        tensor_names(tmp_path / "model.safetensors")
