@@ -6,7 +6,7 @@ is checked once untimed (imports, first-call set-up) and then timed with and wit
 Best of K costs about K distinct verdicts per object (identical candidates are checked once);
 a repair about one verdict per alternative tried (``eval.verified.repair``).
 
-python3 bench/verified_cost.py --data /tmp/demo_d/data --records 8
+python3 bench/verified_cost.py --data SHARDS --records 8    (e.g. the test shards `jax3dc demo` builds)
 """
 
 from __future__ import annotations
