@@ -129,11 +129,9 @@ def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: 
 def _repaired(structure: Structure, parts: dict, boxes: dict, metres: float, out: Path, wrote) -> Structure:
     """``structure`` with flagged hinges repaired where the verdict improves; repairs.json lists them."""
     from eval.verified.repair import repair
-    from jax3dc.structure.serialize import joint_to_dict
 
     fixed = repair(structure, parts, metres, False, boxes)
-    doc = [{"part": r.part, "kind": r.kind, "before": joint_to_dict(r.before), "after": joint_to_dict(r.after),
-            "reason": r.reason} for r in fixed.repairs]
+    doc = [r.to_dict() for r in fixed.repairs]
     (out / "repairs.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     wrote("repairs", out / "repairs.json")
     return fixed.structure

@@ -32,6 +32,7 @@ from eval.physics.guides import welded
 from eval.physics.tolerances import ATTACH_TOL_NU
 from eval.verified.verdicts import Physics, VerdictCache, flagged, merit
 from jax3dc.structure import Box, Joint, Structure, canonicalize, parse_structure, to_json
+from jax3dc.structure.serialize import joint_to_dict
 
 FLIPPED = "axis flipped"
 PIVOT = "pivot moved"
@@ -53,6 +54,11 @@ class Repair:
     before: Joint
     after: Joint
     reason: str  # one line: how the verdict changed
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (verified.jsonl, predict's repairs.json)."""
+        return {"part": self.part, "kind": self.kind, "before": joint_to_dict(self.before),
+                "after": joint_to_dict(self.after), "reason": self.reason}
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,7 @@ kept, else the winner (canonical JSON), else the winner's raw text when nothing 
 from __future__ import annotations
 
 import json
+import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -22,7 +23,6 @@ from eval.generation import read_predictions_file
 from eval.verified.pool import Job, Verified, verify_many
 from eval.verified.select import Candidate
 from jax3dc.structure import to_json
-from jax3dc.structure.serialize import joint_to_dict
 
 
 @dataclass
@@ -57,8 +57,7 @@ def verified_line(result: Verified, candidates: Sequence[Candidate]) -> dict[str
     if fixed is not None and fixed.repairs:
         line["text"] = to_json(fixed.structure)
         line["ok"] = bool(fixed.after.get("ok"))
-        line["repairs"] = [{"part": r.part, "kind": r.kind, "before": joint_to_dict(r.before), "after": joint_to_dict(r.after),
-                            "reason": r.reason} for r in fixed.repairs]
+        line["repairs"] = [r.to_dict() for r in fixed.repairs]
     elif choice.structure is not None:
         line["text"] = to_json(choice.structure)
     else:
@@ -70,8 +69,6 @@ def verify_predictions(records: Sequence[Record], lines: Mapping[str, Mapping[st
                        repair: bool, sources: Mapping[str, Path] | None = None, backend: str = "c",
                        chunk: int | None = None) -> tuple[dict[str, str], VerifyStats]:
     """Key -> the text to score for every record, verifying only keys not yet in ``out_path``."""
-    import time
-
     done = read_predictions_file(out_path)
     todo = [r for r in records if r.key not in done]
     stats = VerifyStats()
