@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import sys
+import warnings
 
-from jax3dc.errors import Jax3dcError
+from jax3dc.errors import Jax3dcError, shorten
 from jax3dc.gl import configure_gl
 
 # Modules are imported lazily by name so that `jax3dc validate` does not pay for importing jax.
@@ -63,8 +65,28 @@ def positive_float(text: str) -> float:
     return value
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, with its error messages cut to one readable line (they echo the argument given)."""
+
+    def error(self, message: str):
+        super().error(shorten(message))
+
+
+RECURSION_LIMIT = 20_000
+"""Python's default (1000) is below a legitimate 1000-deep parent chain; pure-Python recursion
+costs no C stack on 3.11, and deeper input is refused as a RecursionError, one line."""
+
+
+def _quiet_library_noise() -> None:
+    """numpy floating-point and trimesh warnings would print before the error line that explains
+    them; the project checks finiteness itself and says what went wrong."""
+    warnings.filterwarnings("ignore", message=r"(overflow|invalid value|divide by zero|underflow) encountered",
+                            category=RuntimeWarning)
+    logging.getLogger("trimesh").setLevel(logging.ERROR)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="jax3dc",
         description="One image in, a structured, articulated, simulation-ready 3D object out.",
     )
@@ -81,14 +103,28 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 2
+    _quiet_library_noise()
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), RECURSION_LIMIT))
     try:
         return int(args.func(args) or 0)
     except Jax3dcError as e:
-        print(f"jax3dc {args.command}: error: {e}", file=sys.stderr)
-        return 1
+        return _fail(args, str(e))
+    except RecursionError:
+        return _fail(args, "the input is nested too deeply (parent chains, JSON or XML nesting)")
+    except MemoryError:
+        return _fail(args, "out of memory: the input is too large for this machine")
+    except OSError as e:
+        # A file the user named could not be opened or written (a missing output folder, no permission).
+        where = e.filename if e.filename is not None else "file"
+        return _fail(args, f"{where}: {e.strerror or e}")
     except KeyboardInterrupt:
         print(f"jax3dc {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _fail(args: argparse.Namespace, message: str) -> int:
+    print(f"jax3dc {args.command}: error: {shorten(message)}", file=sys.stderr)
+    return 1
 
 
 if __name__ == "__main__":

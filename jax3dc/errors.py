@@ -56,3 +56,17 @@ class ProgramError(Jax3dcError):
 class SetupError(Jax3dcError):
     """The machine lacks something a command needs (a system library, an OpenGL context); the
     message says what to install or set."""
+
+
+MAX_MESSAGE_CHARS = 400
+"""Longest message the CLI prints; a hostile argument (a 500,000-character path) is cut in the middle."""
+
+
+def shorten(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    """``text`` on one line and at most about ``limit`` characters: the start and end are kept,
+    since a message names the problem first and often the file last."""
+    text = " ".join(str(text).split())
+    if len(text) <= limit:
+        return text
+    head, tail = (limit * 2) // 3, limit // 3
+    return f"{text[:head]} ...[{len(text) - head - tail} characters cut]... {text[-tail:]}"

@@ -40,7 +40,16 @@ def _part_id_list(text: str) -> list[int]:
     return ids
 
 
+MAX_PARTS = 100_000
+"""Default cap on --parts / --part-ids: a 1 MiB document holds fewer nodes than this, so a larger
+count can only be a mistake (or an attempt to make validate build a list of 20 million ids)."""
+
+
 def run_validate(args: argparse.Namespace) -> int:
+    count = args.parts if args.parts else len(args.part_ids or ())
+    if count > args.max_parts:
+        raise InputFileError(args.file, f"{count} part ids requested; the cap is {args.max_parts} "
+                                        "(raise it with --max-parts) [max_parts]")
     doc = read_document(args.file)
     part_ids = list(range(1, args.parts + 1)) if args.parts else args.part_ids
     errors = validate(doc, part_ids=part_ids)
@@ -85,6 +94,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="the segmentation has parts 1..N: node ids must be exactly these")
     ids.add_argument("--part-ids", type=_part_id_list, metavar="1,2,3",
                      help="the part ids of the segmentation (comma-separated): node ids must be exactly these")
+    p.add_argument("--max-parts", type=positive_int, default=MAX_PARTS, metavar="N",
+                   help=f"refuse --parts / --part-ids above N (default: {MAX_PARTS})")
     p.set_defaults(func=run_validate)
 
     c = subparsers.add_parser(

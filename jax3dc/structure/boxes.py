@@ -16,6 +16,8 @@ from jax3dc.errors import InputFileError, StructureError
 from jax3dc.structure.schema import Box
 
 BOX_DECIMALS = 6
+MAX_BOXES_BYTES = 4 << 20
+"""A boxes.json of 10,000 parts is about 1 MB; a larger file is refused before it is parsed."""
 
 
 def _clean(x: float) -> float:
@@ -80,7 +82,12 @@ def load_boxes(path: str | Path) -> dict[int, Box]:
     """Boxes from a ``boxes.json`` file; any problem is an InputFileError naming the file."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        with path.open("rb") as f:
+            data = f.read(MAX_BOXES_BYTES + 1)
+        if len(data) > MAX_BOXES_BYTES:
+            raise InputFileError(path, f"the file is over {MAX_BOXES_BYTES} bytes, far above any real boxes.json "
+                                       "[boxes_size]")
+        text = data.decode("utf-8")
     except FileNotFoundError:
         raise InputFileError(path, "no such file") from None
     except (OSError, UnicodeDecodeError) as e:
@@ -91,5 +98,7 @@ def load_boxes(path: str | Path) -> dict[int, Box]:
         raise InputFileError(path, f"invalid JSON at line {e.lineno} column {e.colno}: {e.msg}") from None
     except RecursionError:
         raise InputFileError(path, "invalid JSON: nested too deeply") from None
+    except ValueError as e:  # an integer literal longer than Python's digit limit
+        raise InputFileError(path, f"invalid JSON: {e}") from None
     except StructureError as e:
         raise InputFileError(path, str(e)) from None

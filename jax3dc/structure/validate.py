@@ -9,7 +9,7 @@ Rule names (``StructureError.rule``):
   vector_shape, id_format, no_nodes, part_ids, parent_exists, self_parent, cycle,
   material_exists, family, joint_without_parent, joint_type, axis_finite, axis_zero,
   pivot_finite, range_finite, range_order, hinge_range, relation_type, relation_endpoint,
-  relation_self, symmetric_plane, relation_plane.
+  relation_self, symmetric_plane, relation_plane, text.
 """
 
 from __future__ import annotations
@@ -109,6 +109,11 @@ class _Checker:
 
     def string(self, value: object, where: str) -> str | None:
         if isinstance(value, str):
+            try:
+                value.encode("utf-8")
+            except UnicodeEncodeError as e:  # JSON's "\\ud800" escape decodes to a lone surrogate
+                self.fail("text", where, f"is not valid Unicode text (a lone surrogate at character {e.start})")
+                return None
             return value
         self.fail("value_type", where, f"must be a string, got {_show(value)}")
         return None
