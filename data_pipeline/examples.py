@@ -26,6 +26,7 @@ from jax3dc.model.tokenizer import Tokenizer
 from jax3dc.prompt import chat_messages, code_messages
 
 TASKS = ("structure", "code")
+IMAGES_PER_TASK = {"structure": 2, "code": 1}  # I and S; I alone
 
 
 class UnusableRecord(Jax3dcError):
@@ -52,7 +53,7 @@ class ExampleEncoder:
 
     @property
     def images_per_example(self) -> int:
-        return 2 if self.task == "structure" else 1
+        return IMAGES_PER_TASK[self.task]
 
     def images(self, record: Record) -> list[Image.Image]:
         blobs = (record.image_png, record.seg_png)[: self.images_per_example]

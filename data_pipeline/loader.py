@@ -25,7 +25,7 @@ from typing import Any, Iterator, Mapping, Sequence
 import grain
 import numpy as np
 
-from data_pipeline.examples import TASKS, ExampleEncoder, UnusableRecord
+from data_pipeline.examples import IMAGES_PER_TASK, TASKS, ExampleEncoder, UnusableRecord
 from data_pipeline.packing import Example, RowLayout, pack_row
 from data_pipeline.record import CorruptRecordError, decode_record
 from data_pipeline.shards import shard_paths
@@ -52,6 +52,7 @@ class LoaderConfig:
     rows: int  # rows per batch on THIS process
     split: str = "train"
     task: str = "structure"
+    tasks: tuple[str, ...] = ()  # one per source (the same folder may appear under both); empty: `task` for all
     weights: tuple[float, ...] = ()  # one per source; empty: equal
     pack: int = 6  # examples per row at most (1: no packing, one padded example per row)
     pixel_dtype: str = "float32"  # float32 (exact) or bfloat16 (half the bytes; for bf16 models)
@@ -185,10 +186,22 @@ def row_layout(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
         if ours != model_id:
             raise LoaderError(f"tokenizer {tokenizer.source} has {name} = {ours}, the model expects {model_id}")
     h, w = smart_resize(cfg.image_size, cfg.image_size, processor.factor, processor.min_pixels, processor.max_pixels)
-    return RowLayout(seq_len=cfg.seq_len, pack=cfg.pack, images_per_example=2 if cfg.task == "structure" else 1,
+    images = max(IMAGES_PER_TASK[t] for t in source_tasks(cfg))
+    return RowLayout(seq_len=cfg.seq_len, pack=cfg.pack, images_per_example=images,
                      grid=(1, h // processor.patch_size, w // processor.patch_size), patch_dim=model.vision.patch_dim,
                      pad_id=tokenizer.special.endoftext, image_token_id=model.image_token_id,
                      merge=model.vision.spatial_merge_size, pixel_dtype=cfg.pixel_dtype)
+
+
+def source_tasks(cfg: LoaderConfig) -> tuple[str, ...]:
+    """The task of each source: ``cfg.tasks`` when given (one per source), else ``cfg.task`` for all."""
+    tasks = cfg.tasks or (cfg.task,) * len(cfg.sources)
+    if len(tasks) != len(cfg.sources):
+        raise LoaderError(f"{len(tasks)} tasks for {len(cfg.sources)} sources")
+    unknown = [t for t in tasks if t not in TASKS]
+    if unknown:
+        raise LoaderError(f"task {unknown[0]!r}: expected one of {TASKS}")
+    return tuple(tasks)
 
 
 def _source(path_list: Sequence[Path], cfg: LoaderConfig) -> tuple[grain.MapDataset, int]:
@@ -213,10 +226,9 @@ def _full_pass(lengths: Sequence[int], weights: Sequence[float]) -> int:
 def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
                   processor: ImageProcessorConfig) -> grain.IterDataset:
     """The whole pipeline as a grain IterDataset of (batch, skip counts)."""
-    if cfg.task not in TASKS:
-        raise LoaderError(f"task {cfg.task!r}: expected one of {TASKS}")
     if not cfg.sources:
         raise LoaderError("no data sources given")
+    tasks = source_tasks(cfg)
     if cfg.weights and len(cfg.weights) != len(cfg.sources):
         raise LoaderError(f"{len(cfg.weights)} weights for {len(cfg.sources)} sources")
     if cfg.weights and min(cfg.weights) <= 0:  # grain's mix refuses a zero proportion
@@ -227,10 +239,11 @@ def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
         raise LoaderError(f"process {cfg.process_index} of {cfg.process_count}")
     layout = row_layout(cfg, model, tokenizer, processor)
     sources, lengths = zip(*(_source(shard_paths([s], cfg.split), cfg) for s in cfg.sources))
-    mixed = sources[0] if len(sources) == 1 else grain.MapDataset.mix(list(sources), list(cfg.weights) or None)
-    encoder = ExampleEncoder(tokenizer, processor, layout.merge, cfg.task, cfg.image_size)
-    examples = mixed.map(_Decode(encoder, cfg.split))
-    what = f"split {cfg.split!r} ({cfg.task} task) of {', '.join(cfg.sources)} ({sum(lengths)} records)"
+    decoded = [ds.map(_Decode(ExampleEncoder(tokenizer, processor, layout.merge, task, cfg.image_size), cfg.split))
+               for ds, task in zip(sources, tasks)]
+    examples = decoded[0] if len(decoded) == 1 else grain.MapDataset.mix(decoded, list(cfg.weights) or None)
+    named = ", ".join(s if len(set(tasks)) == 1 else f"{s} ({t})" for s, t in zip(cfg.sources, tasks))
+    what = f"split {cfg.split!r} ({'+'.join(dict.fromkeys(tasks))} task) of {named} ({sum(lengths)} records)"
     batches = _PackedBatches(examples.to_iter_dataset(), layout, cfg.rows, _full_pass(lengths, cfg.weights), what)
     if cfg.workers > 0:
         from absl import flags  # grain workers read absl flags; unparsed flags make them fail

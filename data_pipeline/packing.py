@@ -7,9 +7,10 @@ A packed row keeps its examples apart exactly as if each were alone in its own r
 * ``position_ids`` restart for every example (the multimodal RoPE ids of the example alone);
 * labels are shifted inside each example, so an example's last token never predicts the next
   example's first token;
-* images sit in fixed slots (``pack * images_per_example`` per row, all of one size); the
-  model places image features per row (``images_per_row``), so unused slots (zero pixels) are
-  computed by the frozen vision tower but never read.
+* images fill a row's slots in order (``pack * images_per_example`` per row, all of one size),
+  so rows may mix examples of one image (code task) and two (structure task); the model places
+  a row's image features in the order of its image tokens (``images_per_row``), so unused
+  trailing slots (zero pixels) are computed by the frozen vision tower but never read.
 
 So the loss of a packed batch equals the loss of the same examples unpacked.
 """
@@ -86,7 +87,7 @@ class RowLayout:
 
     seq_len: int
     pack: int  # examples per row at most
-    images_per_example: int
+    images_per_example: int  # the most images one example may bring (slots are sized for it)
     grid: tuple[int, int, int]  # (t, h, w) patch grid of every image
     patch_dim: int
     pad_id: int
@@ -115,13 +116,14 @@ def pack_row(examples: Sequence[Example], layout: RowLayout) -> dict[str, np.nda
     segments = np.zeros(L, np.int32)
     positions = np.zeros((3, L), np.int32)
     pixels = np.zeros((layout.slots * layout.patches_per_image, layout.patch_dim), pixel_dtype(layout.pixel_dtype))
-    offset = 0
+    offset = slot = 0
     for s, ex in enumerate(examples):
         n = len(ex)
         if offset + n > L:
             raise ValueError(f"examples need {offset + n} tokens, the row has {L}")
-        if ex.image_grid_thw.shape[0] != layout.images_per_example:
-            raise ValueError(f"{ex.key}: {ex.image_grid_thw.shape[0]} images, rows expect {layout.images_per_example}")
+        if ex.image_grid_thw.shape[0] > layout.images_per_example:
+            raise ValueError(f"{ex.key}: {ex.image_grid_thw.shape[0]} images, rows hold at most "
+                             f"{layout.images_per_example} per example")
         if (ex.image_grid_thw != np.asarray(layout.grid)).any():
             raise ValueError(f"{ex.key}: image grids {ex.image_grid_thw.tolist()}, rows expect {list(layout.grid)}")
         span = slice(offset, offset + n)
@@ -130,8 +132,9 @@ def pack_row(examples: Sequence[Example], layout: RowLayout) -> dict[str, np.nda
         loss_mask[offset:offset + n - 1] = ex.labels[1:] != IGNORE_INDEX
         segments[span] = s + 1
         positions[:, span] = rope_positions(ex.input_ids, ex.image_grid_thw, layout.image_token_id, layout.merge)
-        first = s * layout.images_per_example * layout.patches_per_image
+        first = slot * layout.patches_per_image
         pixels[first:first + ex.pixel_values.shape[0]] = ex.pixel_values
+        slot += ex.image_grid_thw.shape[0]
         offset += n
     grids = np.tile(np.asarray(layout.grid, np.int32), (layout.slots, 1))  # unused slots: zero pixels, never placed
     return {"input_ids": ids, "labels": labels, "loss_mask": loss_mask, "segment_ids": segments,

@@ -48,6 +48,9 @@ class TrainConfig:
     data_weights: tuple[float, ...] = ()
     val_data: str = ""  # empty: validate on the datasets' val split (held-out sequences for synthetic)
     task: str = "structure"  # structure: I + S + prompt -> JSON; code: I -> part program
+    # One task per data folder (the same folder may be named twice, once per task): one model
+    # learns both stages; empty: `task` for every folder.
+    data_tasks: tuple[str, ...] = ()
     tokenizer: str = ""  # folder with tokenizer.json; empty: the init checkpoint's, else Qwen3's
     pack: int = 6  # examples packed per row at most (1: one padded example per row); ~1.5k tokens each at 448 px
     loader_workers: int = 0  # grain worker processes decoding and packing
@@ -167,8 +170,12 @@ def validate(cfg: TrainConfig) -> None:
     require_data(cfg)
     if cfg.batch_size % cfg.grad_accum:
         raise ConfigError(f"batch_size {cfg.batch_size} is not a multiple of grad_accum {cfg.grad_accum}")
-    if cfg.task not in ("structure", "code"):
-        raise ConfigError(f"task {cfg.task!r}: expected structure or code")
+    for task in (cfg.task, *cfg.data_tasks):
+        if task not in ("structure", "code"):
+            raise ConfigError(f"task {task!r}: expected structure or code")
+    folders = [s for s in cfg.data.split(",") if s]
+    if cfg.data_tasks and len(cfg.data_tasks) != len(folders):
+        raise ConfigError(f"data_tasks names {len(cfg.data_tasks)} tasks for {len(folders)} data folders")
     if cfg.pack < 1 or cfg.loader_workers < 0:
         raise ConfigError(f"pack must be >= 1 and loader_workers >= 0 (got {cfg.pack}, {cfg.loader_workers})")
     if cfg.attention not in ("auto", "cudnn", "xla"):

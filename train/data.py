@@ -73,6 +73,7 @@ def make_loader(cfg: TrainConfig, model: Qwen3VLConfig, split: str, tokenizer: T
     loader_cfg = LoaderConfig(
         sources=tuple(s for s in sources.split(",") if s), seq_len=cfg.seq_len,
         rows=cfg.batch_size // jax.process_count(), split=split, task=cfg.task,
+        tasks=cfg.data_tasks if sources == cfg.data else (),
         weights=cfg.data_weights if sources == cfg.data else (), pack=cfg.pack, image_size=cfg.image_size,
         pixel_dtype="bfloat16" if cfg.compute_dtype == "bfloat16" else "float32", seed=cfg.seed, shuffle=train, workers=cfg.loader_workers if train else 0,
         process_index=jax.process_index(), process_count=jax.process_count())

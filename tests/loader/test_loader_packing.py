@@ -25,6 +25,14 @@ def setup():
     return cfg, tok, encoder, examples
 
 
+@pytest.fixture(scope="module")
+def code_examples(setup):
+    """Code-task examples (image I alone -> part program) of two records."""
+    cfg, tok, _, _ = setup
+    encoder = ExampleEncoder(tok, tiny_processor(), cfg.vision.spatial_merge_size, task="code")
+    return [encoder.encode(record(c, s)) for s, c in enumerate(CATEGORIES[3:5])]
+
+
 def layout_for(cfg, tok, seq_len: int, pack: int) -> RowLayout:
     return RowLayout(seq_len=seq_len, pack=pack, images_per_example=2, grid=(1, 8, 8),
                      patch_dim=cfg.vision.patch_dim, pad_id=tok.special.endoftext,
@@ -50,40 +58,45 @@ def test_labels_cover_exactly_the_answer(setup) -> None:
     assert row["loss_mask"][len(ex) - 1:].sum() == 0  # nothing predicted past the example
 
 
-def test_packed_loss_equals_unpacked(setup) -> None:
-    """Per-token NLL of every example is the same in one packed row and in rows of its own."""
+def token_nll(model: Qwen3VL, rows: list[dict]) -> list[np.ndarray]:
+    """Per-token NLL of the scored positions of each row."""
+    batch = {k: np.stack([r[k] for r in rows]) for k in rows[0]}
+    per_row = batch["image_grid_thw"].shape[1]
+    hidden = model(jnp.asarray(batch["input_ids"]), attention_mask=jnp.asarray(batch["attention_mask"]),
+                   pixel_values=jnp.asarray(batch["pixel_values"].reshape(-1, batch["pixel_values"].shape[-1])),
+                   image_grid_thw=jnp.asarray(batch["image_grid_thw"].reshape(-1, 3)),
+                   position_ids=jnp.asarray(batch["position_ids"].transpose(1, 0, 2)),
+                   segment_ids=jnp.asarray(batch["segment_ids"]), images_per_row=per_row,
+                   vision_window=64, return_hidden=True)
+    out = []
+    for b in range(len(rows)):
+        where = np.nonzero(batch["loss_mask"][b])[0]
+        logits = model.logits(hidden[b, where])
+        logz = jax.nn.logsumexp(logits, axis=-1)
+        picked = jnp.take_along_axis(logits, jnp.asarray(batch["labels"][b, where])[:, None], axis=-1)[:, 0]
+        out.append(np.asarray(logz - picked))
+    return out
+
+
+@pytest.mark.parametrize("mixed", [False, True], ids=["structure", "structure+code"])
+def test_packed_loss_equals_unpacked(setup, code_examples, mixed: bool) -> None:
+    """Per-token NLL of every example is the same in one packed row and in rows of its own, also
+    when a row mixes code examples (one image) with structure examples (two)."""
     cfg, tok, _, examples = setup
+    if mixed:  # one-image examples first, between and last: image slots are filled in order
+        examples = [code_examples[0], examples[0], code_examples[1], examples[1]]
     model = Qwen3VL(cfg, rngs=nnx.Rngs(3))
     total = sum(len(e) for e in examples)
-    packed = pack_row(examples, layout_for(cfg, tok, total + 7, 3))
+    packed = pack_row(examples, layout_for(cfg, tok, total + 7, len(examples)))
     alone = [pack_row([e], layout_for(cfg, tok, max(len(e) for e in examples), 1)) for e in examples]
-
-    def token_nll(rows: list[dict]) -> list[np.ndarray]:
-        batch = {k: np.stack([r[k] for r in rows]) for k in rows[0]}
-        per_row = batch["image_grid_thw"].shape[1]
-        hidden = model(jnp.asarray(batch["input_ids"]), attention_mask=jnp.asarray(batch["attention_mask"]),
-                       pixel_values=jnp.asarray(batch["pixel_values"].reshape(-1, batch["pixel_values"].shape[-1])),
-                       image_grid_thw=jnp.asarray(batch["image_grid_thw"].reshape(-1, 3)),
-                       position_ids=jnp.asarray(batch["position_ids"].transpose(1, 0, 2)),
-                       segment_ids=jnp.asarray(batch["segment_ids"]), images_per_row=per_row,
-                       vision_window=64, return_hidden=True)
-        out = []
-        for b in range(len(rows)):
-            where = np.nonzero(batch["loss_mask"][b])[0]
-            logits = model.logits(hidden[b, where])
-            logz = jax.nn.logsumexp(logits, axis=-1)
-            picked = jnp.take_along_axis(logits, jnp.asarray(batch["labels"][b, where])[:, None], axis=-1)[:, 0]
-            out.append(np.asarray(logz - picked))
-        return out
-
-    (packed_nll,) = token_nll([packed])
-    alone_nll = np.concatenate(token_nll(alone))
+    (packed_nll,) = token_nll(model, [packed])
+    alone_nll = np.concatenate(token_nll(model, alone))
     assert packed_nll.shape == alone_nll.shape and packed_nll.size > 100
     np.testing.assert_allclose(packed_nll, alone_nll, rtol=2e-5, atol=2e-5)
     # and the packing is not vacuous: without segments, later examples would see earlier ones
     leaky = dict(packed)
     leaky["segment_ids"] = (packed["segment_ids"] > 0).astype(np.int32)
-    assert not np.allclose(token_nll([leaky])[0], alone_nll, atol=1e-3)
+    assert not np.allclose(token_nll(model, [leaky])[0], alone_nll, atol=1e-3)
 
 
 def test_unused_image_slots_are_ignored(setup) -> None:

@@ -169,6 +169,26 @@ def test_mixture_weights_are_checked(two_sources) -> None:
         loader([a, b], weights=(1.0, 0.0))
 
 
+def test_one_folder_feeds_both_tasks(dataset: Path) -> None:
+    """The same folder under two tasks: rows carry structure examples (I, S, prompt) and code
+    examples (I alone) in the configured proportion, each example's images in order."""
+    merged = 64 // 4  # image tokens of one 32 x 32 image (patch 4, merge 2)
+    it = loader([dataset, dataset], tasks=("structure", "code"), weights=(0.5, 0.5))
+    images = []
+    for _ in range(12):
+        batch = next(it)
+        for row in range(ROWS):
+            ids, seg = batch["input_ids"][row], batch["segment_ids"][row]
+            for s in range(1, int(seg.max()) + 1):
+                images.append(int((ids[seg == s] == tiny_config().image_token_id).sum()) // merged)
+    assert set(images) == {1, 2}, images
+    assert 0.25 < images.count(1) / len(images) < 0.75
+    with pytest.raises(LoaderError, match="2 sources"):
+        loader([dataset, dataset], tasks=("code",))
+    with pytest.raises(LoaderError, match="'codes'"):
+        loader([dataset], tasks=("codes",))
+
+
 def test_wrong_tokenizer_for_the_model_is_refused(dataset: Path) -> None:
     from jax3dc.model.config import Qwen3VLConfig
 

@@ -35,6 +35,16 @@ def test_validate_accepts_synthetic_and_folders():
     validate(apply_overrides(TrainConfig(), ["data=runs/a,runs/b"]))
 
 
+def test_validate_checks_one_task_per_data_folder():
+    both = apply_overrides(TrainConfig(), ["data=runs/a,runs/a", "data_tasks=structure,code"])
+    validate(both)
+    assert both.data_tasks == ("structure", "code")
+    with pytest.raises(ConfigError, match="1 tasks for 2 data folders"):
+        validate(apply_overrides(TrainConfig(), ["data=runs/a,runs/b", "data_tasks=code"]))
+    with pytest.raises(ConfigError, match="'program'"):
+        validate(apply_overrides(TrainConfig(), ["data=runs/a", "data_tasks=program"]))
+
+
 def _loader(**kw):
     image = ImageLayout(100, 101, 102, (4, 4), 2, 12)
     return SyntheticBatches(vocab=128, text_vocab=100, seq_len=32, global_rows=4, image=image, **kw)
