@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ast
 
+from jax3dc.program.interpreter import Budget, run_program
 from jax3dc.program.syntax import parse_program
 
 _PREAMBLE = '''\
@@ -315,7 +316,13 @@ def _statements(body: list[ast.stmt], indent: str) -> list[str]:
     return lines
 
 
-def to_blender_script(text: str) -> str:
-    """A Blender Python script that builds the program's parts; raises ProgramError like run_program."""
+def to_blender_script(text: str, budget: Budget = Budget()) -> str:
+    """A Blender Python script that builds the program's parts; raises ProgramError like run_program.
+
+    The program is run first, under ``budget``: the script must not carry what `program run`
+    refuses (a loop past the step budget, 10,000 segments, a part named twice), since Blender
+    would then spend hours or gigabytes on it with no budget at all.
+    """
+    run_program(text, budget)
     tree = parse_program(text)
     return _PREAMBLE + "\n".join(_statements(tree.body, "")) + "\n"

@@ -9,6 +9,8 @@ Other shapes go through manifold3d when it is installed (through trimesh).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from jax3dc.program.solids import Solid
@@ -25,7 +27,11 @@ def is_axis_aligned_box(solid: Solid) -> bool:
     return box_volume > 0 and abs(solid.signed_volume() - box_volume) <= _BOX_TOL * max(1.0, box_volume)
 
 
-def box_difference(base: Solid, cutters: list[Solid]) -> Solid:
+def _no_deadline() -> None:
+    return None
+
+
+def box_difference(base: Solid, cutters: list[Solid], check_time: Callable[[], None] = _no_deadline) -> Solid:
     lo, hi = base.bounds()
     cut_bounds = [c.bounds() for c in cutters]
     edges = []
@@ -39,6 +45,7 @@ def box_difference(base: Solid, cutters: list[Solid]) -> Solid:
     centres = np.meshgrid(*[(e[:-1] + e[1:]) / 2 for e in edges], indexing="ij")
     filled = np.ones((nx, ny, nz), dtype=bool)
     for c_lo, c_hi in cut_bounds:
+        check_time()
         inside = np.ones_like(filled)
         for ax in range(3):
             inside &= (centres[ax] > c_lo[ax]) & (centres[ax] < c_hi[ax])
@@ -85,10 +92,14 @@ def box_difference(base: Solid, cutters: list[Solid]) -> Solid:
     return Solid(verts, remap.reshape(-1, 3).astype(np.int64))
 
 
-def difference(base: Solid, cutters: list[Solid]) -> Solid:
-    """`base` minus every cutter; ValueError when no available method can do it."""
+def difference(base: Solid, cutters: list[Solid], check_time: Callable[[], None] = _no_deadline) -> Solid:
+    """`base` minus every cutter; ValueError when no available method can do it.
+
+    ``check_time`` is called between cutters and raises when the caller's time budget is spent:
+    one call with thousands of cutters must not outlast it.
+    """
     if is_axis_aligned_box(base) and all(is_axis_aligned_box(c) for c in cutters):
-        return box_difference(base, cutters)
+        return box_difference(base, cutters, check_time)
     try:
         import manifold3d  # noqa: F401  (trimesh's boolean engine)
         import trimesh
@@ -96,6 +107,9 @@ def difference(base: Solid, cutters: list[Solid]) -> Solid:
         raise ValueError(
             "difference of shapes other than axis-aligned boxes needs the manifold3d package"
         ) from None
-    meshes = [trimesh.Trimesh(s.vertices, s.faces, process=False) for s in [base, *cutters]]
-    out = trimesh.boolean.difference(meshes, engine="manifold")
+    out = trimesh.Trimesh(base.vertices, base.faces, process=False)
+    for cutter in cutters:  # one cutter at a time, so the deadline is checked between them
+        check_time()
+        out = trimesh.boolean.difference([out, trimesh.Trimesh(cutter.vertices, cutter.faces, process=False)],
+                                         engine="manifold")
     return Solid(np.asarray(out.vertices, dtype=np.float64), np.asarray(out.faces, dtype=np.int64))

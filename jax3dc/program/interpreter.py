@@ -11,7 +11,7 @@ import numpy as np
 import trimesh
 
 from jax3dc.errors import ProgramError
-from jax3dc.program.library import FUNCTIONS, MAX_COPIES, ArgumentError, PartCall
+from jax3dc.program.library import FUNCTIONS, MAX_COPIES, ArgumentError, OutOfTime, PartCall, deadline
 from jax3dc.program.solids import Solid
 from jax3dc.program.syntax import SIGNATURES, parse_program
 from jax3dc.structure.schema import Material
@@ -19,10 +19,13 @@ from jax3dc.structure.schema import Material
 DEFAULT_MAX_SECONDS = 5.0
 """Wall-clock limit of one program run."""
 DEFAULT_MAX_TRIANGLES = 2_000_000
-"""Limit on the triangles of all meshes a program creates (intermediate ones included)."""
+"""Limit on the triangles of all meshes a program creates (intermediate ones included) plus those
+it emits as parts: one mesh named by part() a thousand times is written a thousand times."""
 DEFAULT_MAX_STEPS = 100_000
 """Limit on executed statements, loop iterations included."""
 MAX_RANGE = 10_000
+MAX_INTEGER = 10**15
+"""Largest whole number a program may write or compute (beyond it floats and ranges overflow)."""
 MAX_COORDINATE = 1e9
 """Meshes whose vertices leave +-MAX_COORDINATE (e.g. after repeated scaling) are refused."""
 
@@ -30,8 +33,8 @@ MAX_COORDINATE = 1e9
 @dataclass(frozen=True)
 class Budget:
     """Limits on one run; exceeding any is a ProgramError naming the line. Model output is
-    untrusted, so every run has one (time is checked between statements; single calls are
-    kept short by the library's size limits)."""
+    untrusted, so every run has one (time is checked between statements and inside long calls
+    such as a boolean with many cutters; triangles are counted when built and when emitted)."""
 
     max_seconds: float = DEFAULT_MAX_SECONDS
     max_triangles: int = DEFAULT_MAX_TRIANGLES
@@ -90,11 +93,13 @@ class _Run:
         if self.steps > self.budget.max_steps:
             raise ProgramError(line, f"step budget exceeded ({self.budget.max_steps} statements)")
         if time.perf_counter() > self.deadline:
-            raise ProgramError(line, f"time budget exceeded ({self.budget.max_seconds:g} s)")
+            raise ProgramError(line, f"time budget exceeded ({self.budget.max_seconds:g} s; raise it with --max-seconds)")
 
     # -- expressions --
     def value(self, node: ast.expr) -> Any:
         if isinstance(node, ast.Constant):
+            if isinstance(node.value, int) and abs(node.value) > MAX_INTEGER:
+                raise ProgramError(node.lineno, f"number too large (whole numbers are limited to +-{MAX_INTEGER:g})")
             return node.value
         if isinstance(node, (ast.Tuple, ast.List)):
             return tuple(self.value(e) for e in node.elts)
@@ -129,8 +134,8 @@ class _Run:
             if b == 0:
                 raise ProgramError(node.lineno, "division by zero")
             out = a / b
-        if isinstance(out, int) and abs(out) > 10**15:
-            raise ProgramError(node.lineno, "number too large")
+        if isinstance(out, int) and abs(out) > MAX_INTEGER:
+            raise ProgramError(node.lineno, f"number too large (whole numbers are limited to +-{MAX_INTEGER:g})")
         return out
 
     def call(self, node: ast.Call) -> Any:
@@ -144,18 +149,23 @@ class _Run:
             incoming = sum(a.triangle_count for a in args if isinstance(a, Solid))
             self.check_triangles(node, incoming)
         try:
-            out = fn(*args, **kwargs)
+            with deadline(self.deadline):
+                out = fn(*args, **kwargs)
         except ArgumentError as exc:
             raise ProgramError(node.lineno, f"{name}(): {exc}") from None
+        except OutOfTime:
+            raise ProgramError(node.lineno, f"time budget exceeded ({self.budget.max_seconds:g} s; raise it with "
+                                            f"--max-seconds) inside {name}()") from None
         if isinstance(out, Solid):
             if len(out.vertices) and not np.abs(out.vertices).max() <= MAX_COORDINATE:
                 raise ProgramError(node.lineno, f"{name}(): coordinates beyond +-{MAX_COORDINATE:g}")
+            self.check_triangles(node, out.triangle_count)
             self.triangles += out.triangle_count
-            if self.triangles > self.budget.max_triangles:
-                raise ProgramError(node.lineno, f"triangle budget exceeded ({self.budget.max_triangles})")
         if isinstance(out, PartCall):
             if out.part_id in self.parts:
                 raise ProgramError(node.lineno, f"part id {out.part_id} is named twice")
+            self.check_triangles(node, out.solid.triangle_count)  # each part is written out on its own
+            self.triangles += out.solid.triangle_count
             self.parts[out.part_id] = out
         return out
 
@@ -174,7 +184,8 @@ class _Run:
 
     def check_triangles(self, node: ast.Call, incoming: int) -> None:
         if self.triangles + incoming > self.budget.max_triangles:
-            raise ProgramError(node.lineno, f"triangle budget exceeded ({self.budget.max_triangles})")
+            raise ProgramError(node.lineno, f"triangle budget exceeded ({self.budget.max_triangles}; "
+                                            "raise it with --max-triangles)")
 
 
 def run_program(text: str, budget: Budget = Budget()) -> ProgramResult:
@@ -185,6 +196,8 @@ def run_program(text: str, budget: Budget = Budget()) -> ProgramResult:
         run.statements(tree.body)
     except RecursionError:
         raise ProgramError(None, "the program is nested too deeply") from None
+    except (OverflowError, MemoryError) as exc:  # a number or a size no check above foresaw
+        raise ProgramError(None, f"a value is too large to compute ({type(exc).__name__})") from None
     if not run.parts:
         raise ProgramError(None, "the program names no part (call part(id, name, mesh))")
     parts, names, materials = {}, {}, {}

@@ -8,8 +8,11 @@ the dataset), angles in degrees, `axis` is "x", "y" or "z".
 from __future__ import annotations
 
 import math
+import time
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -28,10 +31,41 @@ MIN_LENGTH = 1e-9
 MAX_PROFILE_POINTS = 256
 MAX_PATH_POINTS = 1024
 """Point limits keep every single call fast (the time budget is checked between statements)."""
+MAX_OPERANDS = 1000
+"""Most meshes one combine() or difference() takes (as many as an array makes)."""
 
 
 class ArgumentError(ValueError):
     """A predefined function got an argument it cannot use."""
+
+
+class OutOfTime(Exception):
+    """The run's deadline passed inside a function (a long boolean or array); the interpreter
+    turns it into a ProgramError naming the line."""
+
+
+_DEADLINE: ContextVar[float] = ContextVar("part_program_deadline", default=math.inf)
+
+
+@contextmanager
+def deadline(at: float) -> Iterator[None]:
+    """Functions called inside this block stop with OutOfTime once ``time.perf_counter()`` passes ``at``."""
+    token = _DEADLINE.set(at)
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+def check_time() -> None:
+    """Called between the steps of long functions, so one call cannot outlast the time budget."""
+    if time.perf_counter() > _DEADLINE.get():
+        raise OutOfTime()
+
+
+def _operands(meshes: tuple, what: str) -> None:
+    if len(meshes) > MAX_OPERANDS:
+        raise ArgumentError(f"{what} takes at most {MAX_OPERANDS} meshes, got {len(meshes)}")
 
 
 @dataclass(frozen=True)
@@ -49,7 +83,7 @@ class PartCall:
 def _number(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ArgumentError(f"{what} must be a number, got {_describe(value)}")
-    if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
+    if abs(value) > MAX_MAGNITUDE or not math.isfinite(value):  # magnitude first: a huge int overflows isfinite
         raise ArgumentError(f"{what} must be a finite number within +-{MAX_MAGNITUDE:g}")
     return float(value)
 
@@ -225,15 +259,17 @@ def difference(base, *cutters) -> Solid:
     """`base` with every cutter removed (exact for axis-aligned boxes)."""
     if not cutters:
         raise ArgumentError("difference needs at least one mesh to remove")
+    _operands(cutters, "difference")
     b = _solid(base, "base")
     cs = [_solid(c, f"cutter {i + 1}") for i, c in enumerate(cutters)]
-    return _geometry(lambda: csg.difference(b, cs))
+    return _geometry(lambda: csg.difference(b, cs, check_time))
 
 
 def combine(*meshes) -> Solid:
     """Several meshes as one (they are kept as separate shells, not fused)."""
     if not meshes:
         raise ArgumentError("combine needs at least one mesh")
+    _operands(meshes, "combine")
     return S.combine([_solid(m, f"mesh {i + 1}") for i, m in enumerate(meshes)])
 
 

@@ -28,10 +28,47 @@ def test_range_size_is_capped():
 
 def test_triangle_budget_counts_created_meshes():
     text = 'a = sphere(1, segments=64, rings=32)\npart(1, "ball", a)\n'
-    result = run_program(text)
+    sphere_triangles = len(run_program(text).parts[1].faces)
     with pytest.raises(ProgramError) as info:
-        run_program(text, Budget(max_triangles=result.triangles - 1))
+        run_program(text, Budget(max_triangles=sphere_triangles - 1))
     assert info.value.line == 1 and "triangle budget" in info.value.message
+
+
+def test_triangle_budget_counts_emitted_parts():
+    """One mesh named by part() many times is written many times: each emission counts."""
+    text = "a = sphere(1, segments=64, rings=32)\nfor i in range(1, 1001):\n    part(i, 'copy', a)\n"
+    with pytest.raises(ProgramError) as info:
+        run_program(text, Budget(max_triangles=100_000))
+    assert info.value.line == 3 and "triangle budget" in info.value.message
+    one = run_program("a = sphere(1, segments=64, rings=32)\npart(1, 'one', a)\n")
+    assert one.triangles == 2 * len(one.parts[1].faces)  # built once, emitted once
+
+
+def test_time_budget_is_checked_inside_one_long_call():
+    """A boolean with hundreds of cutters is one statement; the deadline still stops it."""
+    cutters = ", ".join(f"box(0.001, center=({i / 2000}, 0, 0))" for i in range(900))
+    text = f"a = difference(box(1), {cutters})\npart(1, 'a', a)\n"
+    with pytest.raises(ProgramError) as info:
+        run_program(text, Budget(max_seconds=0.05))
+    assert info.value.line == 1 and "inside difference()" in info.value.message
+
+
+def test_operand_count_is_capped():
+    text = "a = box(1)\nb = combine(" + ", ".join(["a"] * 1001) + ")\n"
+    with pytest.raises(ProgramError, match="at most 1000 meshes"):
+        run_program(text)
+
+
+@pytest.mark.parametrize("text", [
+    "a = box(" + "9" * 400 + ")\n",
+    "a = box(1e308 * 10)\n",
+    "a = " + "9" * 16 + " / 1\n",
+    "for i in range(" + "9" * 30 + "):\n    b = i\n",
+    "a = box(1, center=(" + "1" + "0" * 300 + ", 0, 0))\n",
+])
+def test_huge_numbers_are_program_errors(text):
+    with pytest.raises(ProgramError, match="too large|finite number"):
+        run_program(text)
 
 
 def test_array_is_refused_before_it_is_built():

@@ -41,3 +41,35 @@ def test_missing_file_and_blender_output(tmp_path, capsys):
     compile(script.read_text(), str(script), "exec")
     assert main(["program", "reference"]) == 0
     assert "lathe(" in capsys.readouterr().out
+
+
+def test_blender_refuses_what_run_refuses(tmp_path, capsys):
+    """The Blender script is written only for a program that runs within the same budget."""
+    cases = {
+        "loop.py": "a = box(1)\npart(1, 'a', a)\nfor i in range(9000):\n    for j in range(9000):\n        b = j\n",
+        "segments.py": "part(1, 'a', cylinder(0.5, 1, segments=10000))\n",
+        "emitted.py": "a = sphere(1, segments=128, rings=64)\nfor i in range(1, 200):\n    part(i, 'c', a)\n",
+    }
+    for name, text in cases.items():
+        src = tmp_path / name
+        src.write_text(text)
+        script = tmp_path / f"{name}.bpy"
+        assert main(["program", "run", str(src)]) == 1
+        run_error = capsys.readouterr().err.strip().split(": error: ")[1]
+        assert main(["program", "blender", str(src), "-o", str(script)]) == 1
+        blender_error = capsys.readouterr().err.strip().split(": error: ")[1]
+        assert blender_error == run_error and "\n" not in blender_error
+        assert not script.exists()
+
+
+def test_unwritable_output_is_one_line(tmp_path, capsys):
+    src = tmp_path / "p.py"
+    src.write_text(PROGRAM)
+    missing = tmp_path / "no" / "such" / "s.py"
+    assert main(["program", "blender", str(src), "-o", str(missing)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "s.py" in err and "No such file" in err
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(["program", "run", str(src), "--out", str(blocker / "parts")]) == 1
+    assert "cannot write" in capsys.readouterr().err
