@@ -15,6 +15,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "data_pipeline.convert_cli",
     "data_pipeline.build_cli",
     "data_pipeline.tokenizer_cli",
+    "data_pipeline.restyle_cli",
 )
 
 

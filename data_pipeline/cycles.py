@@ -311,6 +311,7 @@ def restyle_dataset(source: Path, out: Path, split: str = "test", limit: int = 0
         raise InputFileError(source, "no manifest.json: not a dataset written by `jax3dc data build`")
     if out.resolve() == source.resolve():
         raise InputFileError(out, "is the source dataset: write the restyled records to another folder")
+    blender_python()  # no Blender, no work: say so before rebuilding any parts
     out.mkdir(parents=True, exist_ok=True)
     wanted = {"renderer": RENDERER, "source": str(source.resolve()), "split": split, "limit": limit,
               "samples": settings.samples, "denoise": settings.denoise}
