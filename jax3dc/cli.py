@@ -27,6 +27,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "eval.demo_cli",
     "eval.physics.cli",
     "eval.predict.cli",
+    "jax3dc.viewer.cli",
 )
 
 
