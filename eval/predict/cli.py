@@ -21,8 +21,9 @@ parts are centred with largest extent 1 (the normalised frame). The segmentation
 from the image's camera (--camera), and the structure model (--structure-model) reads the image,
 S and the part legend and writes the structure.
 
-Outputs in --out: structure.json, seg.png, parts/, object.urdf, object.xml (MJCF), object.glb,
-object_blender.py, physics.json, report.html, report.png (and program.txt for the code backend,
+Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF),
+object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
+with a slider per joint; open it again with `jax3dc view DIR`) (and program.txt for the code backend,
 structure_raw.txt when the model's JSON is invalid), prompt.txt (the structure model's prompt).
 A bad input stops with one error line; the outputs written before it are kept.
 """

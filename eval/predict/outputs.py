@@ -18,6 +18,7 @@ from jax3dc.export.gltf import export_gltf
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import export_urdf
 from jax3dc.structure.schema import Structure
+from jax3dc.viewer import ViewerInputs, write_viewer
 
 MODEL_NAME = "object"
 
@@ -52,3 +53,9 @@ def write_physics(structure: Structure, parts: dict[int, trimesh.Trimesh], out: 
     path = out / "physics.json"
     path.write_text(json.dumps(verdict, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     return path, verdict
+
+
+def write_viewer_page(out: Path, glb: Path, verdict: dict | None, image_png: bytes, seg_png: bytes) -> Path:
+    """viewer.html (+ viewer_files/): the exported GLB in 3D with joint sliders, the verdict, I and S."""
+    return write_viewer(ViewerInputs(glb.read_bytes(), out.resolve().name, str(glb), verdict, image_png, seg_png),
+                        out / "viewer.html")

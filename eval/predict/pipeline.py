@@ -2,8 +2,8 @@
 
 Steps, each writing its outputs into ``out`` as soon as they exist, so that a failure later on
 leaves every output made before it (and the report says what failed):
-  1. image I (any image Pillow reads; transparency on white, as the model's processor does) and
-     the palette of this image (seeded from its bytes);
+  1. image I (any image Pillow reads; transparency on white, as the model's processor does) -> image.png,
+     and the palette of this image (seeded from its bytes);
   2. stage 1: part meshes (code model -> part program -> interpreter, a segmented mesh file, or
      a parts folder) -> parts/ (+ program.txt for the code backend) and the stage-2 prompt -> prompt.txt;
   3. S rendered from the image's camera -> seg.png;
@@ -11,7 +11,8 @@ leaves every output made before it (and the report says what failed):
      canonical); invalid output -> structure_raw.txt and a StructureError;
   5. exports -> object.urdf, object.xml, object.glb, object_blender.py (+ meshes/);
   6. physics verdict -> physics.json;
-  7. report.html / report.png (always, when stage 1 gave parts).
+  7. report.html / report.png (always, when stage 1 gave parts), and viewer.html (when there is a
+     structure; viewer_files/ beside it): the object in 3D with its joints and verdict (jax3dc.viewer).
 
 The models are plain text-in/text-out callables: pass ``generate_structure`` / ``generate_program``
 to stand in for a checkpoint (tests do; so can a caller with its own model server).
@@ -32,7 +33,7 @@ from tqdm import tqdm
 from data_pipeline.render import Camera, png_bytes
 from eval.metrics.cases import json_text
 from eval.predict.models import DEFAULT_MAX_NEW_TOKENS, TextModel, code_model, structure_candidates, structure_model
-from eval.predict.outputs import write_exports, write_physics
+from eval.predict.outputs import write_exports, write_physics, write_viewer_page
 from eval.predict.report import ReportInputs, write_report
 from eval.predict.segmentation import default_camera, render_segmentation
 from eval.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_mesh, stage1_from_parts_dir,
@@ -181,6 +182,10 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     try:
         step("stage 1")
         rgb, digest = _image_and_digest(image)
+        image_png = png_bytes(np.asarray(rgb))  # I as the models saw it (RGB): the viewer shows it
+        if not (isinstance(image, (str, Path)) and Path(image).resolve() == (out / "image.png").resolve()):
+            (out / "image.png").write_bytes(image_png)  # (never over the input itself)
+        wrote("image", out / "image.png")
         if backend == CODE:
             program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, checkpoints)
             (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
@@ -202,7 +207,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
         step("segmentation")
         width, height = seg_size(rgb)
         seg, _ids = render_segmentation(parts_in.parts, camera, palette, width, height=height)
-        (out / "seg.png").write_bytes(png_bytes(seg))
+        seg_png = png_bytes(seg)
+        (out / "seg.png").write_bytes(seg_png)
         wrote("seg", out / "seg.png")
 
         error: Jax3dcError | None = None
@@ -250,6 +256,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
                               result.structure, result.verdict, None if error is None else str(error))
         for name, path in write_report(report, out).items():
             wrote(name, path)
+        if "glb" in files:  # the viewer articulates the exported object: nothing to show without a structure
+            wrote("viewer", write_viewer_page(out, files["glb"], result.verdict, image_png, seg_png))
     finally:
         bar.close()  # before the caller prints an error line
     if error is not None:

@@ -162,6 +162,7 @@
     group.add(new THREE.ArrowHelper(joint.axis, new THREE.Vector3(), length, colour, length * 0.2, length * 0.1));
     const pivot = new THREE.Mesh(new THREE.SphereGeometry(radius * 0.025, 16, 12), new THREE.MeshBasicMaterial({ color: colour }));
     group.add(pivot);
+    group.traverse((o) => { if (o.material) { o.material.depthTest = false; o.renderOrder = 10; } });  // seen through parts
     group.position.copy(joint.restPosition);  // the pivot, in the parent part's frame: it stays with the parent
     group.visible = false;
     joint.node.parent.add(group);
