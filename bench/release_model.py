@@ -12,9 +12,12 @@ from its orbax checkpoint in OUT/train):
   3. train     `jax3dc train --init release` from scratch, every parameter trained, the
                procedural build mixed with --real (imported real objects, train split only)
   4. evaluate  `jax3dc eval run` on the procedural test split and on --fixtures (real objects
-               kept out of training), `jax3dc eval baselines` on the same references
+               kept out of training), `jax3dc eval baselines` on the same references; with
+               --code-weight, `jax3dc eval run --task code` on the procedural test split too
   5. package   the weights in bf16, sharded below 16 MiB a file, with the tokenizer, processor
                config and a model card, in OUT/release (what `jax3dc/release/` ships)
+`--code-weight W` makes one model serve both stages: a share W of training examples are the code
+task (image I alone -> the record's part program) over the same procedural build.
 `--init DIR` continues from an earlier release folder instead of random weights (new optimiser);
 `--compare DIR` scores an earlier release on the same procedural test records, so a new release
 is committed only when it beats the shipped one. The shipped release 1 came from three such runs
@@ -83,6 +86,14 @@ def _evaluate(model: Path, data: list[str], split: str, out: Path, limit: int, b
     return rows
 
 
+def _evaluate_code(model: Path, data: str, out: Path, limit: int, batch: int, max_new: int) -> dict:
+    """eval run --task code: part programs from image I alone, run and compared with the records' own."""
+    if not (out / "metrics.json").exists():
+        _call(["eval", "run", "--task", "code", "--checkpoint", str(model), "--data", data, "--limit", str(limit),
+               "--batch-size", str(batch), "--bucket", "256", "--max-new-tokens", str(max_new), "--out", str(out)])
+    return json.loads((out / "metrics.json").read_text())
+
+
 def _package(train_dir: Path, out: Path) -> None:
     """bf16 weights, sharded, plus tokenizer and processor files of the run."""
     import jax.numpy as jnp
@@ -113,6 +124,9 @@ def main() -> None:
     p.add_argument("--vocab", type=int, default=2048)
     p.add_argument("--real", default="", help="shards of imported real training objects (train split)")
     p.add_argument("--real-weight", type=float, default=0.1, help="share of training examples from --real")
+    p.add_argument("--code-weight", type=float, default=0.0,
+                   help="share of training examples that are the code task (I -> part program); 0: structure only")
+    p.add_argument("--code-eval-records", type=int, default=100, help="procedural test records for the code task")
     p.add_argument("--compare", default="", help="an earlier release folder scored on the same records")
     p.add_argument("--fixtures", default="", help="shards of real objects never trained on, scored per object")
     p.add_argument("--steps", type=int, default=6000)
@@ -154,15 +168,18 @@ def main() -> None:
         if minutes < 1:
             print("[release] no time left for training in this call; run it again", flush=True)
             return
-        datasets = [str(data)] + ([a.real] if a.real else [])
-        weights = [1 - a.real_weight, a.real_weight] if a.real else []
+        datasets = [str(data)] + ([a.real] if a.real else []) + ([str(data)] if a.code_weight else [])
+        tasks = ["structure"] * (1 + bool(a.real)) + ["code"] * bool(a.code_weight)
+        structure_share = 1 - (a.real_weight if a.real else 0) - a.code_weight
+        weights = [structure_share] + ([a.real_weight] if a.real else []) + ([a.code_weight] if a.code_weight else [])
         overrides = [f"data={','.join(datasets)}", f"val_data={data}", f"image_size={a.image_size}", f"seq_len={a.seq_len}",
                      f"batch_size={a.batch}", "grad_accum=1", f"lr={a.lr}", f"warmup_steps={min(200, a.steps // 20)}",
                      f"steps={a.steps}", f"time_limit_min={minutes:.2f}", "freeze=", f"loader_workers={int(workers) - 2}",
                      "eval_every=500", "eval_batches=2", "save_every=500", "log_every=50", "keep_last=1",
                      f"tokenizer={init_dir or tok}", *a.set]
-        if weights:
+        if len(datasets) > 1:
             overrides.append("data_weights=" + ",".join(f"{w:g}" for w in weights))
+            overrides.append("data_tasks=" + ",".join(tasks))
         _call(["train", "--init", str(init_dir or "release"), "--output-dir", str(train_dir), *_sets(overrides)])
         if _last_step(train_dir) < a.steps:
             print(f"[release] trained to step {_last_step(train_dir)} of {a.steps}; run again to go on", flush=True)
@@ -179,15 +196,20 @@ def main() -> None:
     if a.fixtures:
         results["real_fixtures"] = _evaluate(release, a.fixtures.split(","), "test", out / "eval_fixtures", 0,
                                              a.eval_batch, a.max_new_tokens)
+    code = None
+    if a.code_weight:
+        code = _evaluate_code(release, str(data), out / "eval_code", a.code_eval_records, a.eval_batch, 2048)
     steps = [json.loads(line) for line in (train_dir / "metrics.jsonl").read_text().splitlines() if line.strip()]
     train_rows = [r for r in steps if r.get("kind") == "train"]
     summary = {"args": vars(a), "final_step": _last_step(train_dir), "last_train": train_rows[-1] if train_rows else None,
                "results": {split: {name: _row(m) for name, m in rows.items()} for split, rows in results.items()},
-               "counts": {split: rows["model"]["counts"] for split, rows in results.items()}}
+               "counts": {split: rows["model"]["counts"] for split, rows in results.items()}, "code": code}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     shutil.copy2(out / "summary.json", release / "release_summary.json")
     for split, rows in results.items():
         print(f"\n## {split}\n" + _table({k: _row(v) for k, v in rows.items()}), flush=True)
+    if code:
+        print("\n## code task (procedural test)\n" + json.dumps(code, indent=1), flush=True)
 
 
 if __name__ == "__main__":

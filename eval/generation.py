@@ -1,4 +1,5 @@
-"""Reading a test split from ArrayRecord shards and generating structures for it in batches.
+"""Reading a test split from ArrayRecord shards and generating structures (or, for the code task,
+part programs from image I alone) for it in batches.
 
 Records are tokenised once up front (ids only; pixels are made per batch, so a large split does
 not sit in memory as patches), sorted longest first so a batch that does not fit shows up at the
@@ -7,8 +8,8 @@ through a jitted prefill + the jitted decode loop of ``jax3dc.model.generate``. 
 ``vision_window`` = the largest image's patch count so each image attends only to itself (full
 packed attention over a whole batch of images runs out of memory).
 
-Decoding follows ``DecodeOptions``: under the structure grammar (``jax3dc.constrained``) unless
-``constrained`` is off, and with ``candidates`` K > 1 each prompt's prompt pass is repeated into K
+Decoding follows ``DecodeOptions``: structures under the structure grammar (``jax3dc.constrained``)
+unless ``constrained`` is off (part programs have no grammar yet), and with ``candidates`` K > 1 each prompt's prompt pass is repeated into K
 rows: the first greedy, the others sampled (temperature, top-p), all in one batched decode.
 
 Predictions are appended to ``predictions.jsonl`` batch by batch (with K > 1, every candidate and
@@ -33,6 +34,7 @@ import numpy as np
 from PIL import Image
 from tqdm import tqdm
 
+from data_pipeline.examples import IMAGES_PER_TASK
 from data_pipeline.record import CorruptRecordError, Record
 from data_pipeline.shards import read_shard
 from eval.metrics.cases import Reference
@@ -43,7 +45,7 @@ from jax3dc.model.generate import GenerationConfig, decode, left_pad, prefill, r
 from jax3dc.model.params import load_pretrained
 from jax3dc.model.processor import ImageProcessorConfig, preprocess_images, smart_resize
 from jax3dc.model.tokenizer import load_tokenizer
-from jax3dc.prompt import chat_messages
+from jax3dc.prompt import chat_messages, code_messages
 from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
 
 # A legend line of the SPEC §3 prompt: "id: #rrggbb | cx cy cz | ex ey ez".
@@ -149,6 +151,7 @@ class Prompt:
     key: str
     input_ids: np.ndarray
     record: Record
+    task: str = "structure"  # or "code": image I alone -> part program
 
 
 @dataclass(frozen=True)
@@ -180,25 +183,27 @@ class Generator:
             processor = ImageProcessorConfig.qwen3_vl()
         return cls(model, config, tokenizer, processor)
 
-    def images(self, record: Record) -> list:
+    def images(self, record: Record, task: str = "structure") -> list:
+        """I and S for the structure task, I alone for the code task."""
         try:
-            return [Image.open(io.BytesIO(blob)) for blob in (record.image_png, record.seg_png)]
+            return [Image.open(io.BytesIO(blob)) for blob in (record.image_png, record.seg_png)[:IMAGES_PER_TASK[task]]]
         except OSError as e:
             raise InputFileError(record.key, f"record image is not a readable PNG: {e}") from None
 
-    def grids(self, record: Record) -> np.ndarray:
-        """(t, h, w) patch grid of I and S from the PNG sizes alone (no pixel decoding)."""
+    def grids(self, record: Record, task: str = "structure") -> np.ndarray:
+        """(t, h, w) patch grid of the task's images from the PNG sizes alone (no pixel decoding)."""
         p = self.processor
         rows = []
-        for image in self.images(record):
+        for image in self.images(record, task):
             height, width = smart_resize(image.height, image.width, p.factor, p.min_pixels, p.max_pixels)
             rows.append((1, height // p.patch_size, width // p.patch_size))
         return np.asarray(rows, dtype=np.int64)
 
-    def prompt(self, record: Record) -> Prompt:
-        chat = encode_chat(self.tokenizer, chat_messages(record.prompt), self.grids(record),
+    def prompt(self, record: Record, task: str = "structure") -> Prompt:
+        messages = chat_messages(record.prompt) if task == "structure" else code_messages()
+        chat = encode_chat(self.tokenizer, messages, self.grids(record, task),
                            self.config.vision.spatial_merge_size, add_generation_prompt=True)
-        return Prompt(record.key, chat.input_ids, record)
+        return Prompt(record.key, chat.input_ids, record, task)
 
     def generate_batch(self, prompts: Sequence[Prompt], batch_size: int, max_new_tokens: int, bucket: int,
                        options: DecodeOptions = DecodeOptions()) -> list[list[Sample]]:
@@ -208,7 +213,7 @@ class Generator:
         k = options.candidates
         special = self.tokenizer.special
         ids, mask = left_pad([p.input_ids for p in rows], special.endoftext, multiple=bucket)
-        processed = [preprocess_images(self.images(p.record), self.processor) for p in rows]
+        processed = [preprocess_images(self.images(p.record, p.task), self.processor) for p in rows]
         pixels = np.concatenate([x.pixel_values for x in processed])
         grid = np.concatenate([x.image_grid_thw for x in processed])
         window = int(np.prod(grid, axis=1).max())
@@ -218,7 +223,7 @@ class Generator:
         config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext,
                                   temperature=options.temperature if k > 1 else 0.0, top_p=options.top_p if k > 1 else 1.0)
         constraint = None
-        if options.constrained:
+        if options.constrained and all(p.task == "structure" for p in rows):
             texts = [p.record.prompt for p in rows for _ in range(k)]
             constraint = structure_constraint(self.tokenizer, self.config.text.vocab_size, texts,
                                               [p.key for p in rows for _ in range(k)])
@@ -252,15 +257,15 @@ class GenerationStats:
 
 
 def generate_predictions(generator: Generator, records: Sequence[Record], out_path: Path, batch_size: int,
-                         max_new_tokens: int, bucket: int = 64, options: DecodeOptions = DecodeOptions()
-                         ) -> tuple[dict[str, dict[str, Any]], GenerationStats]:
+                         max_new_tokens: int, bucket: int = 64, options: DecodeOptions = DecodeOptions(),
+                         task: str = "structure") -> tuple[dict[str, dict[str, Any]], GenerationStats]:
     """Key -> prediction line for every record (``text``: the greedy candidate; ``candidates``
     when there are several), generating only the keys not yet in ``out_path``."""
     done = read_predictions_file(out_path)
     todo = [r for r in records if r.key not in done]
     stats = GenerationStats()
     if todo:
-        prompts = sorted((generator.prompt(r) for r in todo), key=lambda p: (-len(p.input_ids), p.key))
+        prompts = sorted((generator.prompt(r, task) for r in todo), key=lambda p: (-len(p.input_ids), p.key))
         start_time = time.perf_counter()
         with out_path.open("a", encoding="utf-8") as f, tqdm(total=len(prompts), desc="generating", unit="obj") as bar:
             for start in range(0, len(prompts), batch_size):

@@ -5,6 +5,10 @@ Three sources of predictions: the checkpoint (batched jitted generation, resumab
 predictions.jsonl), ``--predictions FILE`` (score lines made elsewhere), or
 ``--reference-as-prediction`` (each record's own target: a sanity run that must score 100).
 
+``--task code`` scores the stage-1 code backend instead: the model writes a part program from
+image I alone, the interpreter runs it, and eval.metrics.programs compares its parts with those
+of the record's own program (programs.jsonl per object, metrics.json, tables.md).
+
 Generation is grammar-constrained unless ``--unconstrained``. With ``--candidates K`` > 1 or
 ``--repair``, a verification stage follows (``eval.verified.stage``): the physics verdict picks
 among the K candidates and repairs the winner's flagged joints; verified.jsonl says which won,
@@ -70,6 +74,8 @@ def run_eval(args: argparse.Namespace) -> int:
     except OSError as e:
         raise InputFileError(out, f"cannot write: {e.strerror or e}") from None
 
+    if args.task == "code":
+        return _run_code(args, records, out)
     notes = []
     if args.predictions is not None:
         preds, name = load_predictions(args.predictions), Path(args.predictions).stem
@@ -108,6 +114,48 @@ def run_eval(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
+    """The code task: programs from the checkpoint (or --predictions, or the records' own), scored."""
+    from tqdm import tqdm
+
+    from eval.generation import DecodeOptions, Generator, generate_predictions
+    from eval.metrics.cases import load_predictions
+    from eval.metrics.programs import score_program, summarise
+
+    if args.candidates > 1 or args.repair:
+        raise Jax3dcError("--candidates and --repair choose structures; the code task takes neither")
+    if args.predictions is not None:
+        texts, name = load_predictions(args.predictions), Path(args.predictions).stem
+    elif args.reference_as_prediction:
+        texts, name = {r.key: r.program for r in records}, "reference"
+    else:
+        generator = Generator.load(args.checkpoint, dtype=args.dtype)
+        lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
+                                            args.max_new_tokens, args.bucket, DecodeOptions(constrained=False), "code")
+        print("unconstrained decoding (no part-program grammar yet); " + stats.summary())
+        texts, name = {key: line["text"] for key, line in lines.items()}, Path(args.checkpoint).name
+    missing = [r.key for r in records if not r.program]
+    if missing:
+        raise InputFileError(", ".join(args.data), f"{len(missing)} records have no part program (first: {missing[0]})")
+    scores = [score_program(r.key, r.program, texts.get(r.key, "")) for r in tqdm(records, desc="running programs", unit="obj")]
+    metrics = summarise(scores)
+    with (out / "programs.jsonl").open("w", encoding="utf-8") as f:
+        for score in scores:
+            f.write(json.dumps(score.to_dict(), separators=(",", ":")) + "\n")
+    (out / "metrics.json").write_text(json.dumps({"model": name, "task": "code", **metrics}, indent=1), encoding="utf-8")
+    table = ("| model | objects | runs | ids | count err | part box IoU | Chamfer (nu) |\n|---|---|---|---|---|---|---|\n"
+             f"| {name} | {metrics['objects']} | {_fmt(metrics['runs'])} | {_fmt(metrics['ids'])} | "
+             f"{_fmt(metrics['count_err'], 2)} | {_fmt(metrics['box_iou'])} | {_fmt(metrics['chamfer'], 3)} |")
+    (out / "tables.md").write_text(table + "\n", encoding="utf-8")
+    print(table)
+    print(f"wrote {out / 'programs.jsonl'}, {out / 'metrics.json'}")
+    return 0
+
+
+def _fmt(value: float | None, digits: int = 1) -> str:
+    return "-" if value is None else f"{value:.{digits}f}"
+
+
 def register(subparsers: argparse._SubParsersAction) -> None:
     run = subparsers.add_parser(
         "run",
@@ -131,6 +179,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      '({"key", "text"} or {"key", "structure"} lines)')
     run.add_argument("--reference-as-prediction", action="store_true",
                      help="score each record's own target (sanity check: everything must be 100)")
+    run.add_argument("--task", default="structure", choices=("structure", "code"),
+                     help="structure (stage 2: I + S + prompt -> structure, the default) or code (stage 1: I -> part "
+                     "program, scored by running it against the record's own program)")
     run.add_argument("--split", default="test",
                      help="split to evaluate: shard-name prefix and meta.split (default test); "
                      f"'{ALL_SPLITS}' scores every record of every shard")
