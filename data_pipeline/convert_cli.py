@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 
 from data_pipeline.importers.frames import FRONTS
+from data_pipeline.importers.limits import DEFAULT_MAX_BODIES, DEFAULT_MAX_FACES, ImportLimits
+from jax3dc.cli import positive_int
 
 DESCRIPTION = """\
 Convert one articulated object into the project's format.
@@ -47,6 +49,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--category", default=None, help="category written to meta.json (default: from the source)")
     parser.add_argument("--object-id", default=None, help="object id written to meta.json (default: folder name)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    parser.add_argument("--max-faces", type=positive_int, default=DEFAULT_MAX_FACES, metavar="N",
+                        help=f"refuse an object whose meshes (and height fields) hold more than N triangles "
+                             f"(default: {DEFAULT_MAX_FACES})")
+    parser.add_argument("--max-bodies", type=positive_int, default=DEFAULT_MAX_BODIES, metavar="N",
+                        help=f"refuse a URDF with more than N links, or an MJCF with more than N bodies and geoms "
+                             f"once <replicate> is expanded (default: {DEFAULT_MAX_BODIES})")
+    parser.add_argument("--allow-outside", action="store_true",
+                        help="read mesh files outside the object's folder (../, absolute paths, symbolic links "
+                             "that point out); refused by default")
     parser.set_defaults(func=run)
 
 
@@ -54,7 +65,8 @@ def run(args: argparse.Namespace) -> int:
     from data_pipeline.importers.source import import_object
     from data_pipeline.importers.output import write_imported
 
-    obj = import_object(args.path, args.metres_per_unit, args.front, progress=not args.quiet)
+    limits = ImportLimits(args.max_faces, args.max_bodies, args.allow_outside)
+    obj = import_object(args.path, args.metres_per_unit, args.front, progress=not args.quiet, limits=limits)
     if args.category is not None:
         obj.meta["category"] = args.category
     if args.object_id is not None:

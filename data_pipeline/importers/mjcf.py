@@ -28,21 +28,88 @@ from tqdm import tqdm
 
 from data_pipeline.importers import meshes
 from data_pipeline.importers.kinematic_tree import Edge, KinematicTree, Link, Motion
+from data_pipeline.importers.limits import FaceBudget, ImportLimits, inside_folder
 from data_pipeline.importers.urdf import parse_xml
-from jax3dc.errors import InputFileError
+from jax3dc.errors import InputFileError, shorten
+from jax3dc.geometry.mesh_size import declared_faces
 
 HINGE_LIMIT = 2 * math.pi
 _G = mujoco.mjtGeom
 _J = mujoco.mjtJoint
 SKIPPED_GEOMS = {int(_G.mjGEOM_PLANE), int(_G.mjGEOM_HFIELD), int(_G.mjGEOM_SDF)}
+_COUNTED = ("body", "geom")
 
 
-def _compile(path: Path) -> tuple[mujoco.MjModel, dict[str, tuple[list[str], list[str]]]]:
+def _check_xml(path: Path, root, limits: ImportLimits) -> None:
+    """Refuse, before MuJoCo reads the file, what would cost it minutes or gigabytes: bodies and geoms
+    multiplied by nested ``<replicate>``, huge height fields, and included files outside the folder."""
+    total = 0
+    stack = [(root, 1)]
+    while stack:  # iterative: a 100,000-deep nesting must not recurse
+        element, times = stack.pop()
+        for child in element:
+            tag = child.tag if isinstance(child.tag, str) else ""
+            factor = times
+            if tag == "replicate":
+                count = child.get("count", "1")
+                factor = times * (int(count) if count.isdigit() else 1)
+            elif tag in _COUNTED:
+                total += times
+                if total > limits.max_bodies:
+                    raise InputFileError(path, f"the model has more than {limits.max_bodies} bodies and geoms once "
+                                               "<replicate> is expanded; the cap is "
+                                               f"{limits.max_bodies} (raise it with --max-bodies)")
+            elif tag == "hfield":
+                _check_hfield(path, child, limits)
+            elif tag == "include" and child.get("file"):
+                inside_folder(path.parent / child.get("file"), path.parent, path, "<include>", limits, "file")
+            stack.append((child, factor))
+
+
+def _check_hfield(path: Path, element, limits: ImportLimits) -> None:
+    rows, cols = element.get("nrow", "0"), element.get("ncol", "0")
+    samples = int(rows) * int(cols) if rows.isdigit() and cols.isdigit() else 0
+    # MuJoCo allocates the samples while reading the file (100000 x 100000 is 40 GB) although the
+    # importer skips height fields; each sample is about two triangles, so --max-faces caps them.
+    if 2 * samples > limits.max_faces:
+        raise InputFileError(path, f"<hfield name={element.get('name', '')!r:.40}> has {samples} samples "
+                                   f"({rows:.12} x {cols:.12}), about {2 * samples} triangles; the cap is "
+                                   f"{limits.max_faces} (raise it with --max-faces)")
+    if element.get("file"):
+        inside_folder(path.parent / element.get("file"), path.parent, path, "<hfield>", limits, "file")
+
+
+def _mesh_files(path: Path, spec: mujoco.MjSpec, limits: ImportLimits, warnings: list[str]) -> None:
+    """Check each mesh file before MuJoCo loads it: inside the object's folder, faces within the cap;
+    an empty file is dropped with the geoms that use it, and a warning naming it."""
+    budget = FaceBudget(limits)
+    folder = path.parent
+    for mesh in list(spec.meshes):
+        if not mesh.file:
+            continue
+        where = f"<mesh name={mesh.name!r:.60}>"
+        file = inside_folder(folder / (spec.meshdir or "") / mesh.file, folder, path, where, limits)
+        if not file.is_file():
+            raise InputFileError(path, f"{where}: mesh file {file} not found")
+        if file.stat().st_size == 0:
+            warnings.append(f"{where}: mesh file {file} is empty (0 bytes); it and the geoms using it are skipped")
+            for geom in [g for g in spec.geoms if g.meshname == mesh.name]:
+                spec.delete(geom)
+            spec.delete(mesh)
+            continue
+        declared = declared_faces(file)
+        if declared is not None:
+            budget.admit(declared, f"mesh {file}", path, where)
+
+
+def _compile(path: Path, limits: ImportLimits,
+             warnings: list[str]) -> tuple[mujoco.MjModel, dict[str, tuple[list[str], list[str]]]]:
     """Compiled model without textures/materials, and each named body's geom and material names."""
     try:
         spec = mujoco.MjSpec.from_file(str(path))
     except Exception as e:
         raise InputFileError(path, f"MuJoCo cannot read it: {_one_line(e)}") from None
+    _mesh_files(path, spec, limits, warnings)
     names = {
         body.name: ([g.name for g in body.geoms if g.name], [g.material for g in body.geoms if g.material])
         for body in spec.bodies
@@ -65,7 +132,12 @@ def _compile(path: Path) -> tuple[mujoco.MjModel, dict[str, tuple[list[str], lis
 
 
 def _one_line(error: Exception) -> str:
-    return " ".join(str(error).split())
+    text = " ".join(str(error).split())
+    if "unknown exception" in text.lower():
+        # MuJoCo's C++ layer lost the reason; say what usually causes it instead of passing it on
+        return ("MuJoCo failed without giving a reason (usually a mesh, height field or texture file it "
+                "cannot decode, or a model too large for memory)")
+    return shorten(text, 300)
 
 
 def _geom_mesh(model: mujoco.MjModel, g: int) -> trimesh.Trimesh:
@@ -111,14 +183,18 @@ def _motion(model, data, j: int, name: str, where: str, warnings: list[str]) -> 
                   np.array(data.xanchor[j], dtype=float), (lo, hi), name)
 
 
-def read_mjcf(path: Path, progress: bool = False) -> KinematicTree:
+def read_mjcf(path: Path, progress: bool = False, limits: ImportLimits = ImportLimits()) -> KinematicTree:
     """Parse an MJCF file into a :class:`KinematicTree` in metres."""
     path = Path(path)
-    parse_xml(path, "mujoco")  # refuses DOCTYPE/ENTITY and names malformed lines before MuJoCo sees it
-    model, names = _compile(path)
+    root = parse_xml(path, "mujoco")  # refuses DOCTYPE/ENTITY and names malformed lines before MuJoCo sees it
+    _check_xml(path, root, limits)
+    warnings: list[str] = []
+    model, names = _compile(path, limits, warnings)
+    if model.nmeshface > limits.max_faces:  # inline meshes (vertex= / face= attributes) are counted here
+        raise InputFileError(path, f"the model's meshes have {model.nmeshface} faces; the cap is {limits.max_faces} "
+                                   "(raise it with --max-faces)")
     data = mujoco.MjData(model)
     mujoco.mj_kinematics(model, data)  # data.qpos starts at qpos0: the pose written in the file
-    warnings: list[str] = []
 
     body_names = []
     for b in range(model.nbody):

@@ -28,6 +28,7 @@ from tqdm import tqdm
 from data_pipeline.importers import meshes
 from data_pipeline.importers.frames import pose, rpy_matrix, scaling
 from data_pipeline.importers.kinematic_tree import Edge, KinematicTree, Link, Motion
+from data_pipeline.importers.limits import FaceBudget, ImportLimits, inside_folder
 from jax3dc.errors import InputFileError
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -107,8 +108,10 @@ def _mesh_path(urdf: Path, filename: str) -> Path:
     return urdf.parent / filename
 
 
-def _geometry(urdf: Path, element: ET.Element, where: str):
-    """Mesh of one <visual>/<collision>, in the frame of its link."""
+def _geometry(urdf: Path, element: ET.Element, where: str, limits: ImportLimits, budget: FaceBudget,
+              warnings: list[str]):
+    """Mesh of one <visual>/<collision>, in the frame of its link; None for a mesh file without
+    triangles (skipped, with a warning naming it)."""
     geometry = element.find("geometry")
     shape = None if geometry is None else next(iter(geometry), None)
     if shape is None:
@@ -117,19 +120,25 @@ def _geometry(urdf: Path, element: ET.Element, where: str):
         filename = shape.get("filename")
         if not filename:
             raise InputFileError(urdf, f"{where} <mesh>: no filename")
-        mesh = meshes.load_mesh_file(_mesh_path(urdf, filename), urdf, where)
+        mesh_path = inside_folder(_mesh_path(urdf, filename), urdf.parent, urdf, f"{where} <mesh>", limits)
+        mesh = meshes.load_mesh_file(mesh_path, urdf, where, budget, warnings)
+        if mesh is None:
+            return None
         factors = _numbers(urdf, f"{where} <mesh scale>", shape.get("scale"), 3, (1.0, 1.0, 1.0))
         mesh.apply_transform(scaling(factors))
         return mesh
     if shape.tag == "box":
-        return meshes.box(_numbers(urdf, f"{where} <box size>", shape.get("size"), 3, None))
-    if shape.tag == "cylinder":
+        primitive = meshes.box(_numbers(urdf, f"{where} <box size>", shape.get("size"), 3, None))
+    elif shape.tag == "cylinder":
         radius = _numbers(urdf, f"{where} <cylinder radius>", shape.get("radius"), 1, None)[0]
         length = _numbers(urdf, f"{where} <cylinder length>", shape.get("length"), 1, None)[0]
-        return meshes.cylinder(radius, length)
-    if shape.tag == "sphere":
-        return meshes.sphere(_numbers(urdf, f"{where} <sphere radius>", shape.get("radius"), 1, None)[0])
-    raise InputFileError(urdf, f"{where}: unsupported geometry <{shape.tag}>")
+        primitive = meshes.cylinder(radius, length)
+    elif shape.tag == "sphere":
+        primitive = meshes.sphere(_numbers(urdf, f"{where} <sphere radius>", shape.get("radius"), 1, None)[0])
+    else:
+        raise InputFileError(urdf, f"{where}: unsupported geometry <{shape.tag!s:.40}>")
+    budget.admit(len(primitive.faces), f"<{shape.tag}>", urdf, where)  # many primitives add up too
+    return primitive
 
 
 def _label(name: str | None) -> str:
@@ -137,9 +146,10 @@ def _label(name: str | None) -> str:
     return re.sub(r"-\d+$", "", name or "").strip()
 
 
-def read_urdf(path: Path, progress: bool = False) -> KinematicTree:
+def read_urdf(path: Path, progress: bool = False, limits: ImportLimits = ImportLimits()) -> KinematicTree:
     """Parse a URDF into a :class:`KinematicTree` in the URDF's own units (taken as metres)."""
     path = Path(path)
+    budget = FaceBudget(limits)
     robot = parse_xml(path, "robot")
     warnings: list[str] = []
 
@@ -153,6 +163,9 @@ def read_urdf(path: Path, progress: bool = False) -> KinematicTree:
         link_elements[name] = element
     if not link_elements:
         raise InputFileError(path, "no <link> elements")
+    if len(link_elements) > limits.max_bodies:
+        raise InputFileError(path, f"{len(link_elements)} links; the cap is {limits.max_bodies} "
+                                   "(raise it with --max-bodies)")
 
     joint_elements: dict[str, ET.Element] = {}  # child link -> joint element
     joint_names: set[str] = set()
@@ -225,12 +238,14 @@ def read_urdf(path: Path, progress: bool = False) -> KinematicTree:
         pieces, shape_names, material_names = [], [], []
         for index, shape in enumerate(shapes[name]):
             where = f"link {name!r} <{shape.tag}> #{index + 1}"
-            local = _geometry(path, shape, where)
+            local = _geometry(path, shape, where, limits, budget, warnings)
+            bar.update()
+            if local is None:
+                continue
             pieces.append(meshes.transformed(local, world[name] @ _origin(path, shape, where)))
             shape_names.append(_label(shape.get("name")))
             material = shape.find("material")
             material_names.append("" if material is None else material.get("name") or "")
-            bar.update()
         label = semantics[name][1] if name in semantics else None
         links[name] = Link(name, meshes.merged(pieces), label, tuple(n for n in shape_names if n),
                            tuple(dict.fromkeys(n for n in material_names if n)))

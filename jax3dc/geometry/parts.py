@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from jax3dc.errors import InputFileError
+from jax3dc.errors import InputFileError, shorten
+from jax3dc.geometry.mesh_size import MAX_COORDINATE, MAX_PART_FACES, declared_faces
 from jax3dc.structure.schema import Box
 
 PART_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply", ".glb")
@@ -49,15 +50,25 @@ def load_part_mesh(path: Path) -> trimesh.Trimesh:
     """One part's triangles exactly as stored (no merging or reordering of vertices)."""
     kwargs = {"skip_materials": True} if path.suffix.lower() == ".obj" else {}
     try:
+        declared = declared_faces(path)
+    except OSError as e:
+        raise InputFileError(path, f"cannot read the mesh: {e.strerror or e}") from None
+    if declared is not None and declared > MAX_PART_FACES:
+        raise InputFileError(path, f"the mesh has {declared} faces; a part has at most {MAX_PART_FACES}")
+    try:
         loaded = trimesh.load(str(path), force="mesh", process=False, **kwargs)
     except Exception as e:  # trimesh raises many exception types for corrupt files
-        raise InputFileError(path, f"cannot read the mesh: {e}") from None
+        raise InputFileError(path, f"cannot read the mesh: {shorten(str(e), 200)}") from None
     faces = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
     vertices = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)
     if len(faces) == 0:
         raise InputFileError(path, "the mesh has no triangles")
+    if len(faces) > MAX_PART_FACES:
+        raise InputFileError(path, f"the mesh has {len(faces)} triangles; a part has at most {MAX_PART_FACES}")
     if not np.isfinite(vertices).all():
         raise InputFileError(path, "the mesh has non-finite vertex coordinates")
+    if np.abs(vertices).max() > MAX_COORDINATE:
+        raise InputFileError(path, f"the mesh has vertex coordinates beyond +-{MAX_COORDINATE:g}")
     return trimesh.Trimesh(vertices, faces, process=False)
 
 
