@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import warnings
 from dataclasses import dataclass
 from typing import Sequence, Union
 
@@ -136,10 +137,22 @@ def smart_resize(height: int, width: int, factor: int, min_pixels: int, max_pixe
     return h_bar, w_bar
 
 
-def load_image(path: str | os.PathLike) -> Image.Image:
-    """Open and fully decode an image file; a missing, corrupt or non-image file is an InputFileError."""
+MAX_IMAGE_PIXELS = 40_000_000
+"""Largest image decoded (about 6300 x 6300): the model sees at most a few megapixels, and a 12000 x
+12000 image costs 432 MB as RGB before it is shrunk. Checked from the header, before decoding."""
+
+
+def load_image(path: str | os.PathLike, max_pixels: int = MAX_IMAGE_PIXELS) -> Image.Image:
+    """Open and fully decode an image file; a missing, corrupt or non-image file, or one of more
+    than ``max_pixels`` pixels, is an InputFileError."""
     try:
-        with Image.open(path) as image:
+        with warnings.catch_warnings():  # our own cap below says it in one line
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = Image.open(path)
+        with image:
+            if image.width * image.height > max_pixels:
+                raise InputFileError(str(path), f"image of {image.width} x {image.height} pixels; the cap is "
+                                                f"{max_pixels} pixels")
             image.load()
             return image.copy()
     except FileNotFoundError as err:

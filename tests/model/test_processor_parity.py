@@ -175,3 +175,16 @@ def test_saved_config_round_trips_and_loads_in_transformers(tmp_path) -> None:
     ours = preprocess_image(image, config)
     np.testing.assert_array_equal(ours.image_grid_thw, expected["image_grid_thw"])
     np.testing.assert_allclose(ours.pixel_values, expected["pixel_values"], rtol=0, atol=1e-6)
+
+
+def test_load_image_refuses_too_many_pixels_before_decoding(tmp_path):
+    from PIL import Image as PILImage
+
+    from jax3dc.errors import InputFileError
+    from jax3dc.model.processor import load_image
+
+    path = tmp_path / "wide.png"
+    PILImage.new("L", (3000, 2000)).save(path)
+    with pytest.raises(InputFileError, match="3000 x 2000 pixels; the cap is 5000000"):
+        load_image(path, max_pixels=5_000_000)
+    assert load_image(path, max_pixels=6_000_000).size == (3000, 2000)
