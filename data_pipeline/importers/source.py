@@ -18,6 +18,8 @@ URDF_SCALE_NOTE = (
     "is only nominal for them"
 )
 MJCF_SCALE_NOTE = "MJCF lengths are metres"
+MAX_META_BYTES = 1 << 20
+"""PartNet-Mobility's meta.json is a few hundred bytes; a larger one is not read."""
 
 
 def _format_of(path: Path) -> str:
@@ -59,8 +61,8 @@ def _object_info(source: Path) -> dict:
     meta = folder / "meta.json"
     if meta.is_file():
         try:
-            data = json.loads(meta.read_text())
-        except (ValueError, OSError):
+            data = json.loads(meta.read_text()) if meta.stat().st_size <= MAX_META_BYTES else {}
+        except (ValueError, OSError, RecursionError):  # only the category is read from it: a broken file loses that
             data = {}
         if isinstance(data, dict):
             info["category"] = str(data.get("model_cat", ""))

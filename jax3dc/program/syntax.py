@@ -126,7 +126,13 @@ class _Checker:
     def expression(self, node: ast.expr) -> None:
         if isinstance(node, ast.Constant):
             if isinstance(node.value, bool) or not isinstance(node.value, (int, float, str)):
-                raise ProgramError(node.lineno, f"literal {node.value!r} is not supported (numbers and text only)")
+                raise ProgramError(node.lineno, f"literal {node.value!r:.60} is not supported (numbers and text only)")
+            if isinstance(node.value, str) and not node.value.isascii():
+                try:
+                    node.value.encode("utf-8")
+                except UnicodeEncodeError as exc:  # "\ud800": a lone surrogate cannot be printed or written
+                    raise ProgramError(node.lineno, f"text is not valid Unicode (a lone surrogate at character "
+                                                    f"{exc.start})") from None
         elif isinstance(node, (ast.Tuple, ast.List)):
             for elt in node.elts:
                 self.expression(elt)

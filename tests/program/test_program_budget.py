@@ -124,3 +124,8 @@ def test_single_calls_are_bounded():
         with pytest.raises(ProgramError, match=message):
             run_program(text)
         assert time.perf_counter() - start < 5.0
+
+
+def test_lone_surrogate_text_is_refused():
+    with pytest.raises(ProgramError, match="lone surrogate"):
+        run_program('part(1, "\\ud800", box())\n')
