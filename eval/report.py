@@ -2,7 +2,8 @@
 
 Files: metrics.json and per_object.jsonl (as ``jax3dc eval metrics`` writes them), tables.md
 (Table 1 and, with scenes, Table 2), per_category.md (the split metrics per meta.category),
-failure_attribution.png (the five shares of SPEC §5), overlays/<key>.png and index.md linking all.
+failure_attribution.png (the five shares of SPEC §5), overlays/<key>.png and index.md linking all;
+index.html with a thumbnail, the metrics and a 3D viewer link per object (``eval.viewers``).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from eval.cli import write_evaluation
 from eval.metrics.score import Case, Evaluation, evaluate
 from eval.metrics.tables import TABLE1_FAILURES_RELATIONS, TABLE1_STRUCTURE_JOINT, TABLE2, Column
 from eval.overlay import draw_overlay
+from eval.viewers import VIEWERS_DIR, index_html, write_viewers
 from jax3dc.errors import InputFileError
 
 FAILURE_BARS: tuple[tuple[str, str], ...] = (
@@ -138,8 +140,11 @@ def index_markdown(name: str, evaluation: Evaluation, overlays: Mapping[str, str
 
 
 def write_report(out: Path, name: str, cases: Sequence[Case], records: Mapping[str, Any], refs: Mapping[str, Any],
-                 overlay_limit: int, extra: Mapping[str, str] = {}, notes: Sequence[str] = ()) -> Evaluation:
-    """Scores ``cases`` and writes the whole report folder; returns the evaluation."""
+                 overlay_limit: int, extra: Mapping[str, str] = {}, notes: Sequence[str] = (), viewer_limit: int = 0,
+                 sources: Mapping[str, Path] = {}) -> Evaluation:
+    """Scores ``cases`` and writes the whole report folder; returns the evaluation. index.html and
+    viewers/ (``eval.viewers``) hold viewers of the first ``viewer_limit`` parsed predictions;
+    ``sources``: the source folders of imported records, by object id, to rebuild their parts."""
     evaluation = evaluate(cases)
     write_evaluation(evaluation, out)
     categories = {key: str(r.meta.get("category", "unknown")) for key, r in records.items()}
@@ -148,6 +153,9 @@ def write_report(out: Path, name: str, cases: Sequence[Case], records: Mapping[s
         (out / "per_category.md").write_text(per_category_markdown(cases, categories), encoding="utf-8")
         failure_chart(evaluation.metrics, out / "failure_attribution.png")
         overlays = write_overlays(cases, records, refs, out / "overlays", overlay_limit)
+        objects = write_viewers(cases, records, out / VIEWERS_DIR, viewer_limit, sources)
+        (out / "index.html").write_text(index_html(name, evaluation, objects), encoding="utf-8")
+        extra = {**extra, "index.html": "index.html: a thumbnail, the metrics and a 3D viewer per object"}
         (out / "index.md").write_text(index_markdown(name, evaluation, overlays, extra, notes), encoding="utf-8")
     except OSError as e:
         raise InputFileError(out, f"cannot write the report: {e.strerror or e}") from None

@@ -38,6 +38,14 @@ def _write_references(refs: list, path: Path) -> None:
             f.write(json.dumps(line, separators=(",", ":")) + "\n")
 
 
+def source_folders(folders: list[str]) -> dict[str, Path]:
+    """Object id -> its source folder: every sub-folder of the --sources folders."""
+    missing = [folder for folder in folders if not Path(folder).is_dir()]
+    if missing:
+        raise InputFileError(missing[0], "--sources folder not found")
+    return {p.name: p for folder in folders for p in Path(folder).iterdir() if p.is_dir()}
+
+
 def run_eval(args: argparse.Namespace) -> int:
     from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
 
@@ -95,8 +103,8 @@ def run_eval(args: argparse.Namespace) -> int:
         if args.candidates > 1 or args.repair:
             from eval.verified.stage import verify_predictions
 
-            sources = {p.name: p for folder in args.sources for p in Path(folder).iterdir() if p.is_dir()}
-            preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair, sources)
+            preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair,
+                                                 source_folders(args.sources))
             notes.append(verified.summary())
             print(notes[-1])
     extra = {"references.jsonl": "references.jsonl"}
@@ -104,7 +112,7 @@ def run_eval(args: argparse.Namespace) -> int:
         if (out / produced).exists():
             extra[produced] = produced
     evaluation = write_report(out, name, build_cases(refs, preds), by_key, {r.key: r for r in refs},
-                              args.overlays, extra, notes)
+                              args.overlays, extra, notes, args.viewers, source_folders(args.sources))
     print(format_tables([(name, evaluation.metrics)]))
     counts = evaluation.metrics["counts"]
     print(f"\n{counts['parsed']}/{counts['objects']} predictions parsed")
@@ -165,7 +173,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "and score the generations against the records' targets (SPEC §5), and write a report folder: "
         "metrics.json, per_object.jsonl, tables.md, per_category.md, failure_attribution.png, "
         "overlays/<key>.png (reference joints green, predicted red, drawn with the record's "
-        "meta.camera) and index.md. Generations go to OUT/predictions.jsonl as they finish; running "
+        "meta.camera), index.md, and index.html (a thumbnail, the metrics and a 3D viewer per object). Generations go to OUT/predictions.jsonl as they finish; running "
         "the same command again skips keys already there (delete that file to generate afresh, e.g. "
         "with another checkpoint). The end of the run prints tokens/s. Example: jax3dc eval run --checkpoint "
         "runs/ft/final --data data/shards --out reports/test",
@@ -192,6 +200,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="prompt lengths are padded to a multiple of this, limiting recompiles (default 64)")
     run.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"), help="parameter dtype (default bfloat16)")
     run.add_argument("--overlays", type=int, default=16, help="joint overlays for the first N records (default 16)")
+    run.add_argument("--viewers", type=int, default=8,
+                     help="interactive 3D viewers (viewers/<key>.html, linked from index.html) of the first N parsed "
+                     "predictions, each with its physics verdict (about a second per object) (default 8)")
     run.add_argument("--unconstrained", action="store_true",
                      help="decode without the structure grammar (default: every output parses against its legend)")
     run.add_argument("--candidates", type=positive_int, default=1,
