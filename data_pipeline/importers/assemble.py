@@ -18,6 +18,7 @@ from data_pipeline.importers.frames import front_to_minus_y
 from data_pipeline.importers.kinematic_tree import KinematicTree, reduce_to_parts
 from data_pipeline.importers.material_guess import DEFAULT_FAMILY, guess_family
 from jax3dc.errors import InputFileError
+from jax3dc.geometry.mesh_size import MAX_COORDINATE
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.relations import with_extracted_relations
 from jax3dc.structure import canonicalize
@@ -57,6 +58,8 @@ def assemble(
     units_per_nu = float((high - low).max())
     if not np.isfinite(units_per_nu) or units_per_nu <= 0:
         raise InputFileError(tree.source, "the geometry has zero or non-finite extent")
+    if np.abs(vertices).max() > MAX_COORDINATE:
+        raise InputFileError(tree.source, f"the geometry extends beyond +-{MAX_COORDINATE:g} source units")
 
     parts = {
         ids[link]: trimesh.Trimesh((source_vertices[link] - centre) / units_per_nu,

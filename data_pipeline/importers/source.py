@@ -41,12 +41,14 @@ def find_source(path: Path) -> tuple[Path, str]:
     if (path / "mobility.urdf").is_file():
         return path / "mobility.urdf", "urdf"
     candidates = sorted(path.glob("*.urdf")) + sorted(path.glob("*.xml")) + sorted(path.glob("*.mjcf"))
-    found = []
+    found, refused = [], []
     for candidate in candidates:
         try:
             found.append((candidate, _format_of(candidate)))
-        except InputFileError:
-            continue
+        except InputFileError as e:
+            refused.append(e)
+    if not found and len(refused) == 1:
+        raise refused[0]  # the one candidate's own reason (malformed, DOCTYPE...) says more than "none found"
     if len(found) != 1:
         names = ", ".join(p.name for p, _ in found) or "none"
         raise InputFileError(path, f"expected one URDF or MJCF file in the directory, found {names}")

@@ -375,8 +375,10 @@ class _Checker:
                 cycle = path[path.index(cur):]
                 k = cycle.index(min(cycle))
                 cycle = cycle[k:] + cycle[:k]
-                self.fail("cycle", f"node {cycle[0]} parent",
-                          "parent cycle " + " -> ".join(str(i) for i in [*cycle, cycle[0]]))
+                shown = [*cycle, cycle[0]] if len(cycle) <= 10 else [*cycle[:5], "...", *cycle[-4:], cycle[0]]
+                self.fail("cycle", f"node {cycle[0]} parent", f"parent cycle of {len(cycle)} nodes "
+                          + " -> ".join(str(i) for i in shown) if len(cycle) > 10
+                          else "parent cycle " + " -> ".join(str(i) for i in shown))
             for p in path:
                 state[p] = 2
 
