@@ -10,7 +10,9 @@ the test split alone gives the same records as the full build's first test shard
     python3 -m bench.appearance_shift --work /tmp/appearance_shift [--limit 100] [--samples 24]
 
 Writes WORK/summary.json and WORK/tables.md (Table 1 of both renders, the success gap, seconds per
-Cycles image) and prints them. Every step resumes from what WORK already holds.
+Cycles image) and prints them. A third row scores the same records with I replaced by a black
+image: how much of the score the model owes to I at all (S and the legend carry the rest), so a
+small gap can be read for what it is. Every step resumes from what WORK already holds.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import os
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from data_pipeline.build import BuildConfig, factory_sources, run_build
@@ -64,9 +67,11 @@ def main(argv: list[str] | None = None) -> int:
     build_s = build_test_split(mujoco, args.limit)
     restyle_s = timed(["jax3dc", "data", "restyle", "--renderer", "cycles", "--from", str(mujoco), "--out",
                        str(cycles), "--split", "test", "--limit", str(args.limit), "--samples", str(args.samples)])
+    blank = args.work / "blank"
+    write_blank_images(mujoco, blank)
     model = ["--checkpoint", args.checkpoint] if args.checkpoint else []
     eval_s, metrics = {}, {}
-    for name, data in (("mujoco", mujoco), ("cycles", cycles)):
+    for name, data in (("mujoco", mujoco), ("cycles", cycles), ("blank", blank)):
         report = args.work / f"eval_{name}"
         eval_s[name] = timed(["jax3dc", "eval", "run", "--data", str(data), "--out", str(report), "--split", "test",
                               "--limit", str(args.limit), "--overlays", "0", *model])
@@ -85,7 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         "mask_iou": {"min": min(ious), "mean": sum(ious) / len(ious)},
         "seconds": {"build": build_s, "restyle": restyle_s, "eval": eval_s}, "cpus": os.cpu_count(),
     }
-    tables = format_tables([("MuJoCo (as trained)", metrics["mujoco"]), ("Cycles (shifted)", metrics["cycles"])])
+    tables = format_tables([("MuJoCo (as trained)", metrics["mujoco"]), ("Cycles (shifted)", metrics["cycles"]),
+                            ("I black (control)", metrics["blank"])])
     tables += (f"\nsuccess gap (MuJoCo - Cycles): {gap:.1f} points (target <= {TARGET_GAP:.0f}: "
                f"{'met' if summary['met'] else 'not met'}); {images} records; Cycles {args.samples} samples: "
                f"{summary['cycles_render_s_per_image']:.2f} s render, {summary['cycles_wall_s_per_image']:.2f} s "
@@ -95,6 +101,22 @@ def main(argv: list[str] | None = None) -> int:
     example_sheet(mujoco, cycles, args.examples, args.work / "examples.png")
     print(tables)
     return 0
+
+
+def write_blank_images(source: Path, out: Path) -> None:
+    """``source``'s test records with I black (same size), everything else kept, in one shard."""
+    import numpy as np
+
+    from data_pipeline.render import png_array, png_bytes
+    from data_pipeline.shards import read_dataset, write_dataset
+
+    if (out / "manifest.json").exists():
+        return
+    records = list(read_dataset(source))
+    black = {shape: png_bytes(np.zeros(shape, dtype=np.uint8))
+             for shape in {png_array(r.image_png).shape for r in records}}
+    write_dataset(out, (replace(r, image_png=black[png_array(r.image_png).shape]) for r in records),
+                  name="test-00000.array_record")
 
 
 def example_sheet(mujoco: Path, cycles: Path, n: int, path: Path, side: int = 160) -> None:
