@@ -32,8 +32,7 @@ import trimesh
 
 from data_pipeline.record import Record
 from data_pipeline.samples import derived_rng
-from data_pipeline.shards import (SHARD_SUFFIX, finished, load_manifest, read_shard, save_manifest, shard_paths,
-                                  write_shard)
+from data_pipeline.shards import finished, load_manifest, read_shard, save_manifest, shard_paths, write_shard
 from jax3dc.errors import InputFileError, Jax3dcError, SetupError
 from jax3dc.materials import MATERIALS
 from jax3dc.palette import BACKGROUND_RGB
