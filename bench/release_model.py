@@ -113,7 +113,9 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/release")
     p.add_argument("--budget-min", type=float, default=9.3, help="stop this call before this many minutes")
-    p.add_argument("--init", default="release", help="preset, or an earlier release folder to continue from")
+    p.add_argument("--init", default="release", help="preset (random weights; bench/size_sweep.py compares them), or an "
+                   "earlier release folder to continue from")
+    p.add_argument("--tokenizer", default="", help="a folder with tokenizer.json to use instead of learning one")
     p.add_argument("--objects", type=int, default=4000)
     p.add_argument("--scenes", type=int, default=120)
     p.add_argument("--views", type=int, default=2)
@@ -157,7 +159,11 @@ def main() -> None:
         _call(build + (["--appearance", a.appearance] if a.appearance else []))
         print(f"[release] data: {time.perf_counter() - t:.0f} s", flush=True)
 
-    init_dir = Path(a.init) if a.init != "release" else None
+    from train.model_state import PRESETS
+
+    init_dir = None if a.init in PRESETS else Path(a.init)
+    if a.tokenizer:
+        tok = Path(a.tokenizer)
     if init_dir is None and not (tok / "tokenizer.json").exists():
         sources = [x for d in [str(data), *filter(None, a.real.split(","))] for x in ("--data", d)]
         _call(["data", "tokenizer", *sources, "--vocab-size", str(a.vocab), "--out", str(tok), "--quiet"])
@@ -176,11 +182,11 @@ def main() -> None:
                      f"batch_size={a.batch}", "grad_accum=1", f"lr={a.lr}", f"warmup_steps={min(200, a.steps // 20)}",
                      f"steps={a.steps}", f"time_limit_min={minutes:.2f}", "freeze=", f"loader_workers={int(workers) - 2}",
                      "eval_every=500", "eval_batches=2", "save_every=500", "log_every=50", "keep_last=1",
-                     f"tokenizer={init_dir or tok}", *a.set]
+                     f"tokenizer={tok if a.tokenizer or init_dir is None else init_dir}", *a.set]
         if len(datasets) > 1:
             overrides.append("data_weights=" + ",".join(f"{w:g}" for w in weights))
             overrides.append("data_tasks=" + ",".join(tasks))
-        _call(["train", "--init", str(init_dir or "release"), "--output-dir", str(train_dir), *_sets(overrides)])
+        _call(["train", "--init", str(init_dir or a.init), "--output-dir", str(train_dir), *_sets(overrides)])
         if _last_step(train_dir) < a.steps:
             print(f"[release] trained to step {_last_step(train_dir)} of {a.steps}; run again to go on", flush=True)
             return

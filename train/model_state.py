@@ -29,7 +29,7 @@ from train.parallel import state_shardings
 from train.loss import token_loss
 from train.step import cast_floats
 
-PRESETS = ("tiny", "small", "release", "qwen3_vl_2b", "qwen3_vl_4b", "qwen3_vl_8b")
+PRESETS = ("tiny", "mini", "small", "release", "qwen3_vl_2b", "qwen3_vl_4b", "qwen3_vl_8b")
 LOSS_CHUNK = 1024  # sequence positions per logits chunk: bounds the [rows, chunk, vocab] buffer
 
 

@@ -159,6 +159,19 @@ class Qwen3VLConfig:
             tie_word_embeddings=True)
 
     @classmethod
+    def mini(cls, vocab_size: int = 2048) -> Qwen3VLConfig:
+        """About a third of ``release`` (4 decoder layers of 192): the small end of the size sweep
+        (bench/size_sweep.py) that chose the release size."""
+        return cls(
+            vision=VisionConfig(depth=2, hidden_size=128, intermediate_size=512, num_heads=2,
+                                out_hidden_size=192, num_position_embeddings=256,
+                                deepstack_visual_indexes=(0, 1)),
+            text=TextConfig(vocab_size=vocab_size, hidden_size=192, intermediate_size=576,
+                            num_hidden_layers=4, num_attention_heads=3, num_key_value_heads=1,
+                            head_dim=64, mrope_section=(12, 10, 10)),
+            tie_word_embeddings=True)
+
+    @classmethod
     def tiny(cls, vocab_size: int = 128, tie_word_embeddings: bool = False) -> Qwen3VLConfig:
         """A few thousand parameters for tests. Special tokens sit inside the small vocabulary."""
         return cls(
