@@ -30,7 +30,7 @@ def main() -> None:
     warnings.filterwarnings("ignore")
 
     from data_pipeline.shards import read_shard, shard_paths
-    from eval.verified.parts import record_parts
+    from data_pipeline.record_parts import record_parts
     from eval.verified.select import parse_candidate
     from eval.verified.verdicts import Physics
     from jax3dc.structure import boxes_from_dict

@@ -38,7 +38,7 @@ from eval.generation import DecodeOptions, Generator, generate_predictions, read
 from eval.metrics.cases import build_cases  # noqa: E402
 from eval.metrics.score import evaluate  # noqa: E402
 from eval.metrics.tables import format_tables  # noqa: E402
-from eval.verified.parts import record_parts  # noqa: E402
+from data_pipeline.record_parts import record_parts  # noqa: E402
 from eval.verified.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, repair  # noqa: E402
 from eval.verified.select import Candidate, Row, _rank, choose, parse_candidate  # noqa: E402
 from eval.verified.stage import candidates_of  # noqa: E402

@@ -31,6 +31,7 @@ import numpy as np
 import trimesh
 
 from data_pipeline.record import Record
+from data_pipeline.record_parts import record_parts
 from data_pipeline.samples import derived_rng
 from data_pipeline.shards import finished, load_manifest, read_shard, save_manifest, shard_paths, write_shard
 from jax3dc.errors import InputFileError, Jax3dcError, SetupError
@@ -223,8 +224,6 @@ def mask_iou(alpha: np.ndarray, seg_rgb: np.ndarray) -> float:
 
 def _record_parts(record: Record, sources: Mapping[str, Path] | None) -> dict[int, trimesh.Trimesh]:
     """The record's part meshes posed as in its view, rebuilt by the code that built the record."""
-    from eval.verified.parts import record_parts
-
     return record_parts(record, sources)[0]
 
 

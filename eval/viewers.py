@@ -2,7 +2,7 @@
 of every object, and for the first N parsed predictions an interactive viewer (jax3dc.viewer) of
 the predicted structure on the record's own part meshes, with its physics verdict.
 
-The part meshes are rebuilt as the verification stage does (``eval.verified.parts``); an object
+The part meshes are rebuilt as the verification stage does (``data_pipeline.record_parts``); an object
 whose parts cannot be rebuilt (an imported record without ``--sources``) gets no viewer, and the
 index says why.
 """
@@ -42,7 +42,7 @@ def write_thumbnail(image_png: bytes, path: Path) -> None:
 def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], path: Path) -> dict[str, Any]:
     """The viewer of one parsed prediction; returns its physics verdict."""
     from eval.physics.verdict import check_object
-    from eval.verified.parts import record_parts
+    from data_pipeline.record_parts import record_parts
     from jax3dc.export.gltf import gltf_bytes
     from jax3dc.viewer import ViewerInputs, write_viewer
 

@@ -17,7 +17,7 @@ from functools import partial
 from pathlib import Path
 
 from data_pipeline.record import Record
-from eval.verified.parts import record_parts
+from data_pipeline.record_parts import record_parts
 from eval.verified.repair import Repaired, repair
 from eval.verified.select import Candidate, Choice, choose
 from jax3dc.structure import boxes_from_dict

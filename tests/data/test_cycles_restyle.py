@@ -19,7 +19,7 @@ from data_pipeline.cycles import (BACKGROUNDS, CyclesSettings, background_image,
 from data_pipeline.render import png_array
 from data_pipeline.samples import derived_rng
 from data_pipeline.shards import read_dataset
-from eval.verified.parts import record_parts
+from data_pipeline.record_parts import record_parts
 from jax3dc.cli import main
 from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.structure import parse_structure

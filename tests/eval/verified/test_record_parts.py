@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from eval.verified.parts import is_mounted, record_parts
+from data_pipeline.record_parts import is_mounted, record_parts
 from jax3dc.errors import Jax3dcError
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.structure import boxes_from_dict

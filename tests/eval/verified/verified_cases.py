@@ -7,7 +7,7 @@ from dataclasses import dataclass, replace
 import trimesh
 
 from data_pipeline.record import Record
-from eval.verified.parts import record_parts
+from data_pipeline.record_parts import record_parts
 from eval.verified.select import parse_candidate
 from jax3dc.structure import Box, Structure, boxes_from_dict
 
