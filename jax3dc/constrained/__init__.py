@@ -2,7 +2,9 @@
 
 ``structure_constraint`` gives the structure grammar (SPEC §2) for a batch of stage-2 prompts:
 their part ids and joint counts set each row's registers; the tables are built once per tokenizer.
-Pass it to ``jax3dc.model.generate.decode(..., constraint=...)``.
+``program_constraint`` gives the part-program grammar (SPEC §6) for a batch of stage-1 code
+prompts (the same for every row: a program depends on no prompt text).
+Pass either to ``jax3dc.model.generate.decode(..., constraint=...)``.
 """
 
 from __future__ import annotations
@@ -42,4 +44,12 @@ def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], nam
     return Constraint(structure_tables(tokenizer, vocab_size), initial_rows([n for n, _ in counts], [j for _, j in counts]))
 
 
-__all__ = ["Rows", "Tables", "prompt_counts", "structure_constraint"]
+def program_constraint(tokenizer, vocab_size: int, rows: int):
+    """The part-program grammar for ``rows`` rows, as a ``generate.Constraint``."""
+    from jax3dc.constrained import program
+    from jax3dc.model.generate import Constraint
+
+    return Constraint(program.program_tables(tokenizer, vocab_size), program.initial_rows(rows))
+
+
+__all__ = ["Rows", "Tables", "program_constraint", "prompt_counts", "structure_constraint"]

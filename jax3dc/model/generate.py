@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from jax3dc.constrained.structure import Rows, Tables, advance, allowed
+from jax3dc.constrained import program, structure
 from jax3dc.model.qwen3_vl import KVCache
 from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS
 
@@ -69,8 +69,8 @@ class Generated(NamedTuple):
 class Constraint(NamedTuple):
     """A grammar on the device: its lifted tables and each row's state (``jax3dc.constrained``)."""
 
-    tables: Tables
-    rows: Rows
+    tables: structure.Tables | program.Tables
+    rows: structure.Rows | program.Rows
 
 
 class Prefilled(NamedTuple):
@@ -148,17 +148,19 @@ def _decode(graphdef, state, logits: jax.Array, cache, rope_deltas: jax.Array, k
     batch = logits.shape[0]
     stop_ids = jnp.asarray(config.stop_ids, jnp.int32)
 
+    grammar = program if isinstance(constraint and constraint.tables, program.Tables) else structure
+
     def emit(step, logits, out: _Out, rows):
         logits = logits.astype(jnp.float32)
         if rows is not None:
-            mask = allowed(constraint.tables, rows, config.max_new_tokens - step)
+            mask = grammar.allowed(constraint.tables, rows, config.max_new_tokens - step)
             choose_from = jnp.where(mask, logits, -jnp.inf)
         else:
             choose_from = logits
         token = sample_token(choose_from, jax.random.fold_in(key, step), config.temperature, config.top_p, greedy)
         token = jnp.where(out.done, config.pad_id, token)
         if rows is not None:
-            rows = advance(constraint.tables, rows, token, config.max_new_tokens - step)
+            rows = grammar.advance(constraint.tables, rows, token, config.max_new_tokens - step)
         logprob = jnp.take_along_axis(jax.nn.log_softmax(logits, axis=-1), token[:, None], axis=1)[:, 0]
         out = _Out(out.tokens.at[:, step].set(token), out.lengths + (~out.done).astype(jnp.int32),
                    out.logprobs + jnp.where(out.done, 0.0, logprob), out.done | jnp.isin(token, stop_ids))
