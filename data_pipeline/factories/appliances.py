@@ -168,7 +168,7 @@ def washing_machine(w: ProgramWriter, rng: np.random.Generator) -> None:
 def _top_loader(w, rng, width, depth, height, shell, lid_mat, knob_mat) -> None:
     """Washing machine loaded from the top: a lid hinged at the back, a console behind it."""
     console_d, console_h = 0.12, u(rng, 0.08, 0.14)
-    opening = min(width, depth - console_d) * 0.76  # square, so the housing is an exact box difference
+    opening = min(width, depth - console_d) * 0.76  # square: kept from the box-only difference, as the data was built
     drum_box = w.box((opening, opening, 0.4), (0.0, -console_d / 2, height - 0.2))
     body = w.part("body", w.difference(w.box((width, depth, height), (0.0, 0.0, height / 2)), drum_box), shell)
     lid_d = depth - console_d - 0.035  # 25 mm short of the console: room for the lid standing open

@@ -256,7 +256,7 @@ def bevel(size=1.0, width=0.05, center=(0, 0, 0)) -> Solid:
 # ---- combining ----------------------------------------------------------------------------
 
 def difference(base, *cutters) -> Solid:
-    """`base` with every cutter removed (exact for axis-aligned boxes)."""
+    """`base` with every cutter removed; all must be closed meshes (any shape, through manifold3d)."""
     if not cutters:
         raise ArgumentError("difference needs at least one mesh to remove")
     _operands(cutters, "difference")

@@ -30,15 +30,21 @@ _BOX_OBJ = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1
 def _programs() -> dict[str, tuple[str, str]]:
     """name -> (program text, words expected in the error)."""
     big = "a = sphere(1, segments=256, rings=128)\n"
-    # 48 positions per axis: the box-difference grid has 97^3 cells (under its cap), visited once per cutter
-    cutters = ", ".join(f"box(0.005, center=({i % 48 / 50 - 0.47}, {i // 48 % 48 / 50 - 0.47}, {i % 47 / 50 - 0.47}))"
-                        for i in range(1000))
+    # a lattice of 972 crossing rods cut from a fine sphere: 10-20 s of booleans on one core,
+    # so the budget must stop it inside difference()
+    rods = []
+    for i in range(18):
+        for j in range(18):
+            a, b = i / 18 - 0.45, j / 18 - 0.45
+            rods += [f"box((2, 0.02, 0.02), center=(0, {a}, {b}))", f"box((0.02, 2, 0.02), center=({a}, 0, {b}))",
+                     f"box((0.02, 0.02, 2), center=({a}, {b}, 0))"]
+    cutters = ", ".join(rods)
     return {
         "emit_many": (big + "for i in range(1, 5001):\n    part(i, 'c', a)\n", "triangle budget"),
         "emit_combine": (big + "b = combine(" + ", ".join(["a"] * 300) + ")\npart(1, 'b', b)\n", "triangle budget"),
         "array_bomb": (big + "b = linear_array(a, 1000, (1, 0, 0))\n", "triangle budget"),
         "grid_bomb": (big + "b = grid_array(a, (10, 10, 10))\n", "triangle budget"),
-        "long_boolean": ("a = difference(box(2), " + cutters + ")\npart(1, 'a', a)\n", "time budget"),
+        "long_boolean": ("a = difference(sphere(0.7, segments=256, rings=128), " + cutters + ")\npart(1, 'a', a)\n", "time budget"),
         "operands": ("a = box(1)\nb = combine(" + ", ".join(["a"] * 30000) + ")\n", "at most 1000"),
         "segments": ("part(1, 'a', cylinder(0.5, 1, segments=10000))\n", "segments"),
         "nested_loops": ("for i in range(10000):\n    for j in range(10000):\n        b = j\n", "step budget"),
@@ -79,7 +85,7 @@ def _program_cases(inputs: Path, out: Path) -> list[Case]:
     for name, (text, expect) in _programs().items():
         path = folder / f"{name}.py"
         path.write_text(text, encoding="utf-8", errors="surrogatepass")
-        # the boolean takes ~0.5 s here: a tighter budget shows the deadline stopping it mid-call
+        # the boolean alone takes 10 s or more: a tight budget keeps the case short
         budget = ("--max-seconds", "0.1" if name == "long_boolean" else "2")
         cases.append(Case("program run", name, ("program", "run", str(path), "--out", str(out / f"run_{name}"),
                                                 *budget), expect))
