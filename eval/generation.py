@@ -8,9 +8,10 @@ through a jitted prefill + the jitted decode loop of ``jax3dc.model.generate``. 
 ``vision_window`` = the largest image's patch count so each image attends only to itself (full
 packed attention over a whole batch of images runs out of memory).
 
-Decoding follows ``DecodeOptions``: structures under the structure grammar (``jax3dc.constrained``)
-unless ``constrained`` is off (part programs have no grammar yet), and with ``candidates`` K > 1 each prompt's prompt pass is repeated into K
-rows: the first greedy, the others sampled (temperature, top-p), all in one batched decode.
+Decoding follows ``DecodeOptions``: structures under the structure grammar and part programs under
+the part-program grammar (``jax3dc.constrained``) unless ``constrained`` is off, and with
+``candidates`` K > 1 each prompt's prompt pass is repeated into K rows: the first greedy, the
+others sampled (temperature, top-p), all in one batched decode.
 
 Predictions are appended to ``predictions.jsonl`` batch by batch (with K > 1, every candidate and
 its log-likelihood too); a rerun skips the keys already there, so a killed run resumes where it
@@ -40,7 +41,7 @@ from data_pipeline.shards import read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.model.chat import encode_chat
-from jax3dc.constrained import structure_constraint
+from jax3dc.constrained import program_constraint, structure_constraint
 from jax3dc.model.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
 from jax3dc.model.params import load_pretrained
 from jax3dc.model.processor import ImageProcessorConfig, preprocess_images, smart_resize
@@ -223,10 +224,15 @@ class Generator:
         config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext,
                                   temperature=options.temperature if k > 1 else 0.0, top_p=options.top_p if k > 1 else 1.0)
         constraint = None
-        if options.constrained and all(p.task == "structure" for p in rows):
+        tasks = {p.task for p in rows}
+        if options.constrained and len(tasks) > 1:
+            raise ValueError(f"one batch mixes tasks {sorted(tasks)}: each task has its own grammar")
+        if options.constrained and tasks == {"structure"}:
             texts = [p.record.prompt for p in rows for _ in range(k)]
             constraint = structure_constraint(self.tokenizer, self.config.text.vocab_size, texts,
                                               [p.key for p in rows for _ in range(k)])
+        elif options.constrained and tasks == {"code"}:
+            constraint = program_constraint(self.tokenizer, self.config.text.vocab_size, len(rows) * k)
         greedy = (np.arange(len(rows) * k) % k == 0) if k > 1 else None
         out = decode(self.model, prefilled, config, jax.random.key(options.seed), greedy, constraint)
         tokens, lengths, logprobs = np.asarray(out.tokens), np.asarray(out.lengths), np.asarray(out.logprobs)

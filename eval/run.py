@@ -139,8 +139,9 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     else:
         generator = Generator.load(args.checkpoint, dtype=args.dtype)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
-                                            args.max_new_tokens, args.bucket, DecodeOptions(constrained=False), "code")
-        print("unconstrained decoding (no part-program grammar yet); " + stats.summary())
+                                            args.max_new_tokens, args.bucket,
+                                            DecodeOptions(constrained=not args.unconstrained), "code")
+        print(("unconstrained" if args.unconstrained else "part-program grammar") + " decoding; " + stats.summary())
         texts, name = {key: line["text"] for key, line in lines.items()}, Path(args.checkpoint).name
     missing = [r.key for r in records if not r.program]
     if missing:
@@ -204,7 +205,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="interactive 3D viewers (viewers/<key>.html, linked from index.html) of the first N parsed "
                      "predictions, each with its physics verdict (about a second per object) (default 8)")
     run.add_argument("--unconstrained", action="store_true",
-                     help="decode without the structure grammar (default: every output parses against its legend)")
+                     help="decode without the grammar (default: every structure parses against its legend, and with "
+                     "--task code every part program parses)")
     run.add_argument("--candidates", type=positive_int, default=1,
                      help="K: candidates per object from one batched decode, the first greedy, the rest sampled; "
                      "K > 1 lets the physics verdict choose (C MuJoCo, --workers processes). Default 1")

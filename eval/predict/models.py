@@ -27,13 +27,14 @@ DEFAULT_MAX_NEW_TOKENS = 2048
 
 def generate_texts(generator: "Generator", images: Sequence[Image.Image], messages: list[dict], max_new_tokens: int,
                    grammar_prompt: str | None = None, candidates: int = 1, temperature: float = 0.8,
-                   top_p: float = 0.95, seed: int = 0) -> list[tuple[str, float]]:
+                   top_p: float = 0.95, seed: int = 0, program_grammar: bool = False) -> list[tuple[str, float]]:
     """The model's replies (without the end-of-turn token) and their log-likelihoods to one chat
     whose image items are ``images``, in order: ``candidates`` rows of one decode, the first greedy,
-    the others sampled; under the structure grammar of ``grammar_prompt`` when it is given."""
+    the others sampled; under the structure grammar of ``grammar_prompt`` when it is given, or
+    the part-program grammar with ``program_grammar``."""
     import jax
 
-    from jax3dc.constrained import structure_constraint
+    from jax3dc.constrained import program_constraint, structure_constraint
     from jax3dc.model.chat import encode_chat
     from jax3dc.model.generate import GenerationConfig, decode, prefill, repeat_rows  # jax: imported only to generate
     from jax3dc.model.processor import preprocess_images
@@ -51,8 +52,12 @@ def generate_texts(generator: "Generator", images: Sequence[Image.Image], messag
         prefilled = repeat_rows(prefilled, candidates)
     config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext,
                               temperature=temperature if sampled else 0.0, top_p=top_p if sampled else 1.0)
-    constraint = None if grammar_prompt is None else structure_constraint(
-        generator.tokenizer, generator.config.text.vocab_size, [grammar_prompt] * candidates)
+    vocab = generator.config.text.vocab_size
+    constraint = None
+    if grammar_prompt is not None:
+        constraint = structure_constraint(generator.tokenizer, vocab, [grammar_prompt] * candidates)
+    elif program_grammar:
+        constraint = program_constraint(generator.tokenizer, vocab, candidates)
     greedy = np.arange(candidates) == 0 if sampled else None
     out = decode(generator.model, prefilled, config, jax.random.key(seed), greedy, constraint)
     replies = []
@@ -85,6 +90,8 @@ def structure_candidates(generator: "Generator", image: Image.Image, seg: Image.
                                          prompt if constrained else None, candidates)
 
 
-def code_model(generator: "Generator", image: Image.Image, max_new_tokens: int) -> TextModel:
-    """Stage 1, code backend: reads I and the fixed code prompt and writes a part program."""
-    return lambda prompt: generate_text(generator, [image], code_messages(), max_new_tokens)
+def code_model(generator: "Generator", image: Image.Image, max_new_tokens: int, constrained: bool = True) -> TextModel:
+    """Stage 1, code backend: reads I and the fixed code prompt and writes a part program (greedy;
+    under the part-program grammar unless ``constrained`` is off)."""
+    return lambda prompt: generate_texts(generator, [image], code_messages(), max_new_tokens,
+                                         program_grammar=constrained)[0][0]

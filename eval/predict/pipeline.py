@@ -104,12 +104,13 @@ class Checkpoints:
 
 
 def program_text(image: Image.Image, code_model_dir: str | Path | None, generate_program: TextModel | None,
-                 max_new_tokens: int, checkpoints: Checkpoints) -> str:
-    """The code model's part program for ``image`` (its prompt is jax3dc.prompt.CODE_PROMPT)."""
+                 max_new_tokens: int, checkpoints: Checkpoints, constrained: bool = True) -> str:
+    """The code model's part program for ``image`` (its prompt is jax3dc.prompt.CODE_PROMPT),
+    decoded under the part-program grammar unless ``constrained`` is off."""
     if generate_program is None:
         if code_model_dir is None:
             raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
-        generate_program = code_model(checkpoints.get(code_model_dir), image, max_new_tokens)
+        generate_program = code_model(checkpoints.get(code_model_dir), image, max_new_tokens, constrained)
     return generate_program(CODE_PROMPT)
 
 
@@ -153,7 +154,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
     file's units per nu, assumed metres; 1.0 for the code backend, whose programs are in nu).
     ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
-    ``constrained``: decode under the structure grammar (always parses). ``candidates`` K > 1: K
+    ``constrained``: decode under the structure grammar and, for the code backend, the part-program
+    grammar (both always parse). ``candidates`` K > 1: K
     answers from one decode (the first greedy), chosen by the physics verdict (candidates.json says
     which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
     (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
@@ -187,7 +189,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
             (out / "image.png").write_bytes(image_png)  # (never over the input itself)
         wrote("image", out / "image.png")
         if backend == CODE:
-            program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, checkpoints)
+            program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, checkpoints, constrained)
             (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
             wrote("program", out / "program.txt")
             parts_in = stage1_from_program(program)
