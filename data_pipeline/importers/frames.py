@@ -3,17 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """URDF rpy: fixed-axis rotations about X, then Y, then Z, i.e. R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    cr, sr = np.cos(roll), np.sin(roll)
-    cp, sp = np.cos(pitch), np.sin(pitch)
-    cy, sy = np.cos(yaw), np.sin(yaw)
-    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
-    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return rz @ ry @ rx
+    """URDF rpy: fixed-axis rotations about X, then Y, then Z, i.e. R = Rz(yaw) Ry(pitch) Rx(roll)
+    (scipy's lower-case "xyz" is that extrinsic sequence)."""
+    return Rotation.from_euler("xyz", [roll, pitch, yaw]).as_matrix()
 
 
 def pose(rotation: np.ndarray, translation) -> np.ndarray:
@@ -32,7 +28,11 @@ FRONTS = ("-y", "+y", "-x", "+x")
 
 
 def front_to_minus_y(front: str) -> np.ndarray:
-    """Rotation about +Z that turns an object facing ``front`` to face -Y (SPEC §2)."""
+    """Rotation about +Z that turns an object facing ``front`` to face -Y (SPEC §2).
+
+    Quarter turns written out with rounded cosines, so the matrix is exact (0 and +-1); a general
+    rotation would leave 1e-16 residues in every imported vertex.
+    """
     quarter_turns = {"-y": 0, "+x": -1, "+y": 2, "-x": 1}[front]
     angle = quarter_turns * np.pi / 2
     c, s = np.rint(np.cos(angle)), np.rint(np.sin(angle))

@@ -14,6 +14,7 @@ from typing import Callable
 import mujoco
 import numpy as np
 import trimesh
+from scipy.spatial.transform import Rotation
 
 from eval.physics import cpu_backend
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
@@ -154,9 +155,8 @@ def _full_turn(sim: SimModel, k: int) -> bool:
 
 
 def _tilt(quat: np.ndarray) -> float:
-    """Angle between the body's z axis and the world's (quaternion w, x, y, z)."""
-    w, x, y, z = quat / np.linalg.norm(quat)
-    zz = 1 - 2 * (x * x + y * y)
+    """Angle between the body's z axis and the world's (MuJoCo's quaternion order w, x, y, z)."""
+    zz = Rotation.from_quat(quat, scalar_first=True).as_matrix()[2, 2]
     return float(np.arccos(np.clip(zz, -1.0, 1.0)))
 
 

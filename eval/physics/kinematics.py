@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import trimesh
+from scipy.spatial.transform import Rotation
 
 from jax3dc.structure.schema import Joint, Structure
 
@@ -21,10 +22,7 @@ def joint_motion(joint: Joint, value: float, points: np.ndarray) -> np.ndarray:
     if joint.type == "slide":
         return points + value * axis
     pivot = np.asarray(joint.pivot, dtype=np.float64)
-    c, s = np.cos(value), np.sin(value)
-    r = points - pivot
-    rotated = r * c + np.cross(axis, r) * s + np.outer(r @ axis, axis) * (1 - c)  # Rodrigues
-    return rotated + pivot
+    return Rotation.from_rotvec(axis * value).apply(points - pivot) + pivot
 
 
 def posed(structure: Structure, part: int, points: np.ndarray, fractions: dict[int, float]) -> np.ndarray:

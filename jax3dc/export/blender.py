@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
 
 from jax3dc.export.assembly import assemble, unit_axis
 from jax3dc.export.files import write_files
@@ -52,15 +53,16 @@ def _translation(t) -> np.ndarray:
 
 
 def axis_to_z_rotation(axis: np.ndarray) -> np.ndarray:
-    """4x4 rotation taking +Z to the unit ``axis`` (the smallest such rotation; +Z -> -Z about X)."""
-    z = np.array([0.0, 0.0, 1.0])
-    cross, dot = np.cross(z, axis), float(np.dot(z, axis))
+    """4x4 rotation taking +Z to the unit ``axis`` (the smallest such rotation).
+
+    +Z -> -Z is a half turn about X, written out: scipy would pick some perpendicular axis, and the
+    exported joint frames should not depend on that choice.
+    """
     m = np.eye(4)
-    if dot < -1 + 1e-12:
+    if float(axis[2]) < -1 + 1e-12:
         m[:3, :3] = np.diag([1.0, -1.0, -1.0])
-        return m
-    k = np.array([[0, -cross[2], cross[1]], [cross[2], 0, -cross[0]], [-cross[1], cross[0], 0]])
-    m[:3, :3] = np.eye(3) + k + k @ k / (1 + dot)  # Rodrigues' formula for unit vectors
+    else:
+        m[:3, :3] = Rotation.align_vectors(np.asarray(axis, dtype=np.float64)[None], [[0.0, 0.0, 1.0]])[0].as_matrix()
     return m
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from jax3dc.program.polygon import signed_area, triangulate
 
@@ -278,10 +279,9 @@ def combine(solids: list[Solid]) -> Solid:
 
 
 def rotation_matrix(axis: np.ndarray, angle_rad: float) -> np.ndarray:
+    """Right-handed rotation by ``angle_rad`` about ``axis`` (any length)."""
     a = np.asarray(axis, dtype=np.float64)
-    a = a / np.linalg.norm(a)
-    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + np.sin(angle_rad) * k + (1 - np.cos(angle_rad)) * (k @ k)
+    return Rotation.from_rotvec(a / np.linalg.norm(a) * angle_rad).as_matrix()
 
 
 def transformed(solid: Solid, matrix: np.ndarray, center) -> Solid:
