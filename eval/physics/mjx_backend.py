@@ -33,8 +33,9 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from mujoco import mjx
-from mujoco.mjx._src.collision_driver import geom_pairs
 from scipy.spatial import ConvexHull
+
+from eval.physics.mjx_private import geom_pairs
 
 BOX_SLACK_M = 1e-5  # boxes apart by less than this on every axis still go to the narrow phase (float32 poses)
 CHUNK_ITEMS = 16384  # narrow-phase items per vmapped chunk: bounds the memory of the edge-pair arrays
