@@ -8,15 +8,20 @@ constrained at a few named points with :func:`constrain`. The mesh has three axe
 * ``fsdp``   – data parallelism with parameters (and optimiser state) sharded along ``embed``,
 * ``tensor`` – tensor parallelism inside a layer (heads, MLP width, vocabulary).
 
-Changing the parallel layout means changing :data:`LOGICAL_RULES` (or passing another table) or
-the mesh shape, never model code. A logical axis whose size the mesh axes do not divide is left
-replicated, so the same rules work for every model size and device count.
+Changing the parallel layout means changing the table (a run sets it through
+``TrainConfig.sharding_rules``, see :func:`with_overrides`) or the mesh shape, never model code.
+The trainer's batch layout and the loss's shard_map read their mesh axes from the same table
+(:func:`mesh_axes` of ``batch`` and ``vocab``). A logical axis whose size the mesh axes do not
+divide is left replicated, so the same rules work for every model size and device count, and a
+warning names it once (dimension, size, mesh axes): it is never replicated silently.
 """
 
 from __future__ import annotations
 
 import contextlib
 import contextvars
+import functools
+import logging
 import math
 from collections.abc import Iterator, Sequence
 from typing import Any
@@ -57,7 +62,48 @@ LOGICAL_RULES: Rules = (
     ("qkv", None),
 )
 
+log = logging.getLogger(__name__)
+
 _active_rules: contextvars.ContextVar[Rules] = contextvars.ContextVar("jax3dc_rules", default=LOGICAL_RULES)
+
+
+def with_overrides(rules: Rules, overrides: Sequence[str]) -> Rules:
+    """``rules`` with entries replaced by ``"logical=axis+axis"`` strings (``"logical="``: replicated).
+
+    Raises ValueError naming an unknown logical or mesh axis, so a typo cannot pass as a layout.
+    """
+    table = dict(rules)
+    for item in overrides:
+        name, sep, axes_text = item.partition("=")
+        name = name.strip()
+        if not sep or name not in table:
+            raise ValueError(f"sharding rule {item!r}: expected logical=axis[+axis] with logical one of "
+                             f"{', '.join(table)}")
+        axes = tuple(a.strip() for a in axes_text.split("+") if a.strip())
+        unknown = [a for a in axes if a not in MESH_AXES]
+        if unknown:
+            raise ValueError(f"sharding rule {item!r}: mesh axes are {', '.join(MESH_AXES)}, not {', '.join(unknown)}")
+        table[name] = None if not axes else axes[0] if len(axes) == 1 else axes
+    return tuple(table.items())
+
+
+def active_rules() -> Rules:
+    """The table set by the innermost :func:`use_rules` (LOGICAL_RULES outside any)."""
+    return _active_rules.get()
+
+
+def mesh_axes(logical: str, mesh_shape: dict[str, int], rules: Rules) -> tuple[str, ...]:
+    """The mesh axes (of size > 1 in this mesh) that ``logical`` maps to, in table order."""
+    axes = dict(rules).get(logical)
+    axes = () if axes is None else (axes,) if isinstance(axes, str) else tuple(axes)
+    return tuple(a for a in axes if mesh_shape.get(a, 1) > 1)
+
+
+@functools.cache
+def warn_replicated(what: str, size: int, axes: tuple[str, ...], devices: int) -> None:
+    """Log once that a dimension stays whole on every device because its mesh axes do not divide it."""
+    log.warning("%s of size %d does not split over mesh axes %s (%d devices): replicated instead; "
+                "change the sharding rules or the mesh shape to shard it", what, size, "x".join(axes), devices)
 
 
 @contextlib.contextmanager
@@ -99,8 +145,9 @@ def _mesh_size(mesh_shape: dict[str, int], axes: MeshAxes) -> int:
 
 def logical_to_spec(logical_axes: Sequence[str | None], shape: Sequence[int] | None,
                     mesh_shape: dict[str, int], rules: Rules = LOGICAL_RULES) -> PartitionSpec:
-    """PartitionSpec for an array with these logical axes. Mesh axes not in the mesh, already
-    used by an earlier dimension, or not dividing the dimension are dropped (replicated)."""
+    """PartitionSpec for an array with these logical axes. Mesh axes not in the mesh or already
+    used by an earlier dimension are dropped; axes not dividing the dimension are dropped with a
+    logged warning (:func:`warn_replicated`)."""
     table = dict(rules)
     used: set[str] = set()
     spec: list[MeshAxes] = []
@@ -110,6 +157,7 @@ def logical_to_spec(logical_axes: Sequence[str | None], shape: Sequence[int] | N
             axes_t = (axes,) if isinstance(axes, str) else tuple(axes)
             axes_t = tuple(a for a in axes_t if a in mesh_shape and mesh_shape[a] > 1 and a not in used)
             if shape is not None and axes_t and shape[i] % _mesh_size(mesh_shape, axes_t):
+                warn_replicated(f"logical axis {name!r}", int(shape[i]), axes_t, _mesh_size(mesh_shape, axes_t))
                 axes_t = ()
             used.update(axes_t)
             axes = (axes_t[0] if len(axes_t) == 1 else axes_t) if axes_t else None
@@ -122,7 +170,7 @@ def constrain(x: jax.Array, logical_axes: Sequence[str | None]) -> jax.Array:
     mesh = jax.sharding.get_abstract_mesh()
     if mesh.empty:
         return x
-    spec = logical_to_spec(logical_axes, x.shape, dict(mesh.shape), _active_rules.get())
+    spec = logical_to_spec(logical_axes, x.shape, dict(mesh.shape), active_rules())
     return jax.lax.with_sharding_constraint(x, spec)
 
 

@@ -12,6 +12,7 @@ import typing
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
+from jax3dc import sharding
 from jax3dc.errors import Jax3dcError
 
 
@@ -79,6 +80,10 @@ class TrainConfig:
     attention: str = "auto"  # auto: cuDNN fused attention on GPU, XLA elsewhere; or cudnn / xla
     remat: str = "full"  # full: decoder layers recompute activations in the backward pass; none
     mesh: MeshConfig = field(default_factory=MeshConfig)
+    # Rows of the logical -> mesh axes table (jax3dc/sharding.py LOGICAL_RULES) to replace, as
+    # "logical=axis[+axis]" ("logical=": replicated), e.g. batch=data+fsdp,vocab=tensor. Parameters,
+    # activations, the batch layout and the loss all follow the resulting table.
+    sharding_rules: tuple[str, ...] = ()
     seed: int = 0
     # Cadence (in optimiser steps).
     log_every: int = 10
@@ -164,10 +169,19 @@ def require_data(cfg: TrainConfig) -> None:
         raise ConfigError(NO_DATA)
 
 
+def sharding_rules(cfg: TrainConfig) -> sharding.Rules:
+    """The run's logical -> mesh axes table: LOGICAL_RULES with cfg.sharding_rules applied."""
+    try:
+        return sharding.with_overrides(sharding.LOGICAL_RULES, cfg.sharding_rules)
+    except ValueError as e:
+        raise ConfigError(f"sharding_rules: {e}") from None
+
+
 def validate(cfg: TrainConfig) -> None:
     """Reject settings that cannot work before any device work starts (and before the run
     writes anything)."""
     require_data(cfg)
+    sharding_rules(cfg)
     if cfg.batch_size % cfg.grad_accum:
         raise ConfigError(f"batch_size {cfg.batch_size} is not a multiple of grad_accum {cfg.grad_accum}")
     for task in (cfg.task, *cfg.data_tasks):

@@ -22,11 +22,12 @@ import numpy as np
 import optax
 from jax.sharding import Mesh
 
+from jax3dc import sharding
 from jax3dc.errors import Jax3dcError
 from train import model_state
 from train.batch import check_batch
 from train.checkpoint import RunCheckpoints
-from train.config import TrainConfig, to_json, validate
+from train.config import TrainConfig, sharding_rules, to_json, validate
 from train.data import make_loader, run_processor, run_tokenizer
 from train.metrics_log import FlopsModel, MetricsLog, peak_flops, plot_losses
 from train.optimizer import build_optimizer, learning_rate
@@ -69,6 +70,7 @@ class Trainer:
         self.cfg = cfg
         attention_impl = attention_impl or attention_backend(cfg.attention)
         self.mesh = build_mesh(cfg.mesh)
+        self.rules = sharding_rules(cfg)
         real_data = cfg.data != "synthetic"
         self.tokenizer = run_tokenizer(cfg) if real_data else None  # synthetic ids need none
         self.model = model_state.create(cfg, self.mesh, attention_impl, self.tokenizer if real_data else None)
@@ -89,18 +91,19 @@ class Trainer:
 
     # ------------------------------------------------------------------ steps
     def _batch_shardings(self, batch: dict) -> dict:
-        return {k: batch_sharding(self.mesh, v.ndim, leading_accum=True) for k, v in batch.items()}
+        return {k: batch_sharding(self.mesh, v.ndim, leading_accum=True, rules=self.rules) for k, v in batch.items()}
 
     def train_step(self, batch: dict) -> dict:
         """One optimiser step on this process's rows `batch`; returns device metrics."""
         check_batch(batch, self.cfg.batch_size // jax.process_count(), self.cfg.seq_len)
-        g = global_batch(batch, self.mesh, self.accum)
+        g = global_batch(batch, self.mesh, self.accum, self.rules)
         if self._train_step is None:
             compute, _ = model_state.dtypes(self.cfg)
             self._train_step = make_train_step(
                 self.model.graphdef, model_state.score, self.tx, self.schedule, compute, self.mesh,
                 self.state_sharding, self.model.frozen_sharding, self._batch_shardings(g))
-        with jax.set_mesh(self.mesh):  # activates the model's activation-sharding constraints
+        # the mesh activates the model's activation constraints; the rules reach them and the loss
+        with jax.set_mesh(self.mesh), sharding.use_rules(self.rules):
             self.state, metrics = self._train_step(self.state, self.model.frozen, g)
         return metrics
 
@@ -108,13 +111,13 @@ class Trainer:
         """Mean token NLL over `batches` batches of `loader`."""
         nll = scored = 0.0
         for _ in range(batches):
-            g = global_batch(next(loader), self.mesh, self.accum)
+            g = global_batch(next(loader), self.mesh, self.accum, self.rules)
             if self._eval_step is None:
                 compute, _ = model_state.dtypes(self.cfg)
                 self._eval_step = make_eval_step(
                     self.model.graphdef, model_state.score, compute, self.mesh, self.state_sharding,
                     self.model.frozen_sharding, self._batch_shardings(g))
-            with jax.set_mesh(self.mesh):
+            with jax.set_mesh(self.mesh), sharding.use_rules(self.rules):
                 n, _, s = self._eval_step(self.state.params, self.model.frozen, g)
             nll += float(to_host(n))
             scored += float(to_host(s))

@@ -6,10 +6,11 @@ sharding propagation, an FSDP-sharded head is all-gathered and its gradient all-
 chunk, in the forward and again in the backward pass. Here the head enters a ``shard_map`` once
 per micro-batch:
 
-* every device scores its own rows (rows are split over ``data`` x ``fsdp``) against its slice
-  of the vocabulary (split over ``tensor`` when that divides it);
-* the softmax normaliser and the label's logit are combined over ``tensor`` with collectives of
-  [rows, chunk] floats;
+* every device scores its own rows (split over the mesh axes of the ``batch`` rule, data x fsdp
+  by default) against its slice of the vocabulary (the ``vocab`` rule, tensor by default), both
+  read from the active rules table (jax3dc/sharding.py), so the loss follows the run's layout;
+* the softmax normaliser and the label's logit are combined over the vocabulary axis with
+  collectives of [rows, chunk] floats;
 * the head's gradient is summed over the batch axes once, where it leaves the ``shard_map``.
 
 Logits are made ``chunk`` positions at a time and recomputed in the backward pass, so the full
@@ -24,12 +25,11 @@ import jax
 import jax.numpy as jnp
 from jax.sharding import PartitionSpec as P
 
-BATCH_AXES = ("data", "fsdp")
-VOCAB_AXIS = "tensor"
+from jax3dc import sharding
 
 
 def _chunk_scores(h: jax.Array, head: jax.Array, labels: jax.Array, mask: jax.Array,
-                  vocab_axis: str | None) -> tuple[jax.Array, jax.Array]:
+                  vocab_axis: str | tuple[str, ...] | None) -> tuple[jax.Array, jax.Array]:
     """(masked NLL sum, correct-prediction count) of one chunk against this device's head slice."""
     # bf16 logits, then float32: the backward dots stay in bf16 (a float32 cotangent would turn
     # the two head-sized gradient matmuls into slow tf32 GEMMs)
@@ -53,7 +53,7 @@ def _chunk_scores(h: jax.Array, head: jax.Array, labels: jax.Array, mask: jax.Ar
     return nll, correct
 
 
-def _local_loss(hidden, head, labels, mask, chunk: int, vocab_axis: str | None,
+def _local_loss(hidden, head, labels, mask, chunk: int, vocab_axis: str | tuple[str, ...] | None,
                 batch_axes: tuple[str, ...]) -> tuple[jax.Array, jax.Array]:
     rows, length, _ = hidden.shape
     n = length // chunk
@@ -70,6 +70,17 @@ def _local_loss(hidden, head, labels, mask, chunk: int, vocab_axis: str | None,
     return nll, correct
 
 
+def _dividing_axes(logical: str, what: str, size: int, mesh_shape: dict[str, int]) -> tuple[str, ...]:
+    """The mesh axes of ``logical`` in the active rules, or () with a logged warning when they do
+    not divide ``size`` (the dimension is then whole on every device)."""
+    axes = sharding.mesh_axes(logical, mesh_shape, sharding.active_rules())
+    devices = math.prod(mesh_shape[a] for a in axes)
+    if size % devices:
+        sharding.warn_replicated(what, size, axes, devices)
+        return ()
+    return axes
+
+
 def token_loss(hidden: jax.Array, head: jax.Array, labels: jax.Array, mask: jax.Array,
                chunk: int) -> tuple[jax.Array, jax.Array]:
     """(sum of masked token NLL, number of positions whose top logit is the label).
@@ -84,10 +95,9 @@ def token_loss(hidden: jax.Array, head: jax.Array, labels: jax.Array, mask: jax.
     if mesh.empty:
         return _local_loss(hidden, head, labels, mask, chunk, None, ())
     shape = dict(mesh.shape)
-    batch_axes = tuple(a for a in BATCH_AXES if shape.get(a, 1) > 1)
-    if hidden.shape[0] % math.prod(shape[a] for a in batch_axes):
-        batch_axes = ()  # rows that do not split over the mesh are scored whole on every device
-    vocab_axis = VOCAB_AXIS if shape.get(VOCAB_AXIS, 1) > 1 and head.shape[0] % shape[VOCAB_AXIS] == 0 else None
+    batch_axes = _dividing_axes("batch", "loss rows", hidden.shape[0], shape)
+    vocab_axes = _dividing_axes("vocab", "LM-head vocabulary", head.shape[0], shape)
+    vocab_axis = None if not vocab_axes else vocab_axes[0] if len(vocab_axes) == 1 else vocab_axes
     rows = P(batch_axes or None)
     fn = jax.shard_map(
         lambda h, w, y, m: _local_loss(h, w, y, m, chunk, vocab_axis, batch_axes),

@@ -23,7 +23,7 @@ from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.random_weights import build_random
 from jax3dc.sharding import model_shardings
-from train.config import ConfigError, TrainConfig
+from train.config import ConfigError, TrainConfig, sharding_rules
 from train.optimizer import trainable_filter
 from train.parallel import state_shardings
 from train.loss import token_loss
@@ -82,13 +82,14 @@ def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, toke
     build = _constructor(cfg, mcfg, attention_impl)
     is_trainable = trainable_filter(cfg.freeze)
     graphdef, abs_train, abs_frozen = nnx.split(nnx.eval_shape(build), is_trainable, ...)
-    train_sh, frozen_sh = state_shardings(abs_train, mesh), state_shardings(abs_frozen, mesh)
+    rules = sharding_rules(cfg)
+    train_sh, frozen_sh = state_shardings(abs_train, mesh, rules), state_shardings(abs_frozen, mesh, rules)
     if not jax.tree.leaves(abs_train):
         raise ConfigError(f"freeze patterns {cfg.freeze} leave no parameter to train")
 
     if cfg.init in PRESETS:
         # One small fill program per parameter shape: a jitted 4B initialiser compiles for minutes.
-        model = build_random(build, seed=cfg.seed, shardings=model_shardings(nnx.eval_shape(build), mesh))
+        model = build_random(build, seed=cfg.seed, shardings=model_shardings(nnx.eval_shape(build), mesh, rules))
         _, t, f = nnx.split(model, is_trainable, ...)
         cast = jax.jit(lambda t, f: (t, cast_floats(f, compute)), out_shardings=(train_sh, frozen_sh))
         trainable, frozen = cast(t, f)
@@ -101,7 +102,8 @@ def _load_hf(cfg, mesh, attention_impl, is_trainable, train_sh, frozen_sh, compu
     from jax3dc.model import params as hf_params
 
     _, master = dtypes(cfg)
-    model, _ = hf_params.load_pretrained(cfg.init, dtype=master, mesh=mesh, compute_dtype=compute,
+    model, _ = hf_params.load_pretrained(cfg.init, dtype=master, mesh=mesh, rules=sharding_rules(cfg),
+                                         compute_dtype=compute,
                                          attention_impl=attention_impl,
                                          remat=cfg.remat == "full")
     _, t, f = nnx.split(model, is_trainable, ...)

@@ -1,8 +1,9 @@
 """The trainer's view of the device mesh: mesh from the config, shardings for state and batches.
 
-Parameter placement comes from each parameter's logical axis names mapped through the one
-rules table in jax3dc/sharding.py; this module adds the trainer's side: the batch layout (rows
-over data x fsdp) and assembling each process's rows into global arrays.
+Parameter placement comes from each parameter's logical axis names mapped through the run's
+rules table (jax3dc/sharding.py, set by TrainConfig.sharding_rules); this module adds the
+trainer's side from the same table: the batch layout (rows over the ``batch`` rule's mesh axes)
+and assembling each process's rows into global arrays.
 """
 
 from __future__ import annotations
@@ -16,8 +17,6 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from jax3dc import sharding
 from train.config import ConfigError, MeshConfig
 
-BATCH_AXES = ("data", "fsdp")  # batch rows are split over both: fsdp is data parallel for activations
-
 
 def build_mesh(cfg: MeshConfig, devices: list | None = None) -> Mesh:
     """A mesh over all (global) devices with axes (data, fsdp, tensor)."""
@@ -27,23 +26,28 @@ def build_mesh(cfg: MeshConfig, devices: list | None = None) -> Mesh:
         raise ConfigError(f"mesh (data, fsdp, tensor) = ({cfg.data}, {cfg.fsdp}, {cfg.tensor}): {e}") from None
 
 
-def state_shardings(state: Any, mesh: Mesh) -> Any:
-    """NamedSharding for every variable of an nnx State, from its logical axes and the one
-    rules table (axes that do not divide a dimension are left replicated)."""
-    return sharding.state_shardings(state, mesh, sharding.LOGICAL_RULES)
+def state_shardings(state: Any, mesh: Mesh, rules: sharding.Rules) -> Any:
+    """NamedSharding for every variable of an nnx State, from its logical axes and the run's
+    rules table (axes that do not divide a dimension are left replicated, with a warning)."""
+    return sharding.state_shardings(state, mesh, rules)
 
 
 def replicated(mesh: Mesh) -> NamedSharding:
     return NamedSharding(mesh, P())
 
 
-def batch_sharding(mesh: Mesh, ndim: int, leading_accum: bool) -> NamedSharding:
-    """Rows over (data, fsdp); with an accumulation axis in front, that axis is not split."""
+def batch_axes(mesh: Mesh, rules: sharding.Rules) -> tuple[str, ...]:
+    """The mesh axes batch rows are split over: the ``batch`` rule's (data x fsdp by default)."""
+    return sharding.mesh_axes("batch", dict(mesh.shape), rules)
+
+
+def batch_sharding(mesh: Mesh, ndim: int, leading_accum: bool, rules: sharding.Rules) -> NamedSharding:
+    """Rows over the batch axes; with an accumulation axis in front, that axis is not split."""
     lead = (None,) if leading_accum else ()
-    return NamedSharding(mesh, P(*lead, BATCH_AXES, *([None] * (ndim - 1 - len(lead)))))
+    return NamedSharding(mesh, P(*lead, batch_axes(mesh, rules) or None, *([None] * (ndim - 1 - len(lead)))))
 
 
-def global_batch(local: dict[str, np.ndarray], mesh: Mesh, accum: int) -> dict[str, jax.Array]:
+def global_batch(local: dict[str, np.ndarray], mesh: Mesh, accum: int, rules: sharding.Rules) -> dict[str, jax.Array]:
     """Assemble each process's rows into global arrays of shape [accum, rows/accum, ...].
 
     Every process passes its own rows (in loader order); process p's rows become rows
@@ -57,12 +61,13 @@ def global_batch(local: dict[str, np.ndarray], mesh: Mesh, accum: int) -> dict[s
             raise ConfigError(f"{rows} local rows do not split into {accum} micro-batches")
         shaped = value.reshape(accum, rows // accum, *value.shape[1:])
         global_shape = (accum, rows // accum * n_proc, *value.shape[1:])
-        split = mesh.shape["data"] * mesh.shape["fsdp"]
+        axes = batch_axes(mesh, rules)
+        split = int(np.prod([mesh.shape[a] for a in axes]))
         if global_shape[1] % split:
             raise ConfigError(f"micro-batch of {global_shape[1]} rows does not split over "
-                              f"data x fsdp = {split} devices; raise batch_size or lower grad_accum")
-        sharding = batch_sharding(mesh, shaped.ndim, leading_accum=True)
-        out[key] = jax.make_array_from_process_local_data(sharding, shaped, global_shape)
+                              f"{' x '.join(axes)} = {split} devices; raise batch_size or lower grad_accum")
+        layout = batch_sharding(mesh, shaped.ndim, leading_accum=True, rules=rules)
+        out[key] = jax.make_array_from_process_local_data(layout, shaped, global_shape)
     return out
 
 

@@ -18,7 +18,6 @@ import optax
 from flax import nnx
 from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 
-from train.parallel import BATCH_AXES
 
 # score(model, micro_batch) -> (sum of masked token NLL, number of correct argmax predictions)
 Score = Callable[[nnx.Module, dict[str, jax.Array]], tuple[jax.Array, jax.Array]]
@@ -49,11 +48,17 @@ def masked_cross_entropy(logits: jax.Array, labels: jax.Array, mask: jax.Array) 
     return nll, correct
 
 
+def _micro_shardings(batch_sharding: dict[str, NamedSharding]) -> dict[str, NamedSharding]:
+    """Each batch array's layout without its leading accumulation axis: one micro-batch's rows
+    keep the batch axes the run's rules table gave the whole batch (train/parallel.py)."""
+    return {k: NamedSharding(s.mesh, P(*s.spec[1:])) for k, s in batch_sharding.items()}
+
+
 def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTransformation,
                     schedule: optax.Schedule, compute_dtype: jnp.dtype, mesh: Mesh,
                     state_sharding: Any, frozen_sharding: Any, batch_sharding: Any) -> Callable:
     """jit(step)(state, frozen, batch) -> (state, metrics). `batch` arrays are [accum, rows, ...]."""
-    micro_spec = lambda x: NamedSharding(mesh, P(BATCH_AXES, *([None] * (x.ndim - 2))))
+    micro_spec = _micro_shardings(batch_sharding)
 
     def loss_sum(params, frozen, micro, n_scored):
         model = nnx.merge(graphdef, cast_floats(params, compute_dtype), cast_floats(frozen, compute_dtype))
@@ -67,13 +72,13 @@ def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTran
 
         def micro_step(carry, micro):
             grads, nll, correct = carry
-            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec(batch[k])) for k, v in micro.items()}
+            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec[k]) for k, v in micro.items()}
             g, (m_nll, m_correct) = grad_fn(state.params, frozen, micro, n_scored)
             grads = jax.tree.map(lambda a, b: a + b.astype(a.dtype), grads, g)
             return (grads, nll + m_nll, correct + m_correct), None
 
         if jax.tree.leaves(batch)[0].shape[0] == 1:  # no accumulation: no float32 gradient buffer
-            micro = {k: jax.lax.with_sharding_constraint(v[0], micro_spec(v)) for k, v in batch.items()}
+            micro = {k: jax.lax.with_sharding_constraint(v[0], micro_spec[k]) for k, v in batch.items()}
             grads, (nll, correct) = grad_fn(state.params, frozen, micro, n_scored)
         else:
             zeros = jax.tree.map(lambda p: jnp.zeros(p.shape, jnp.float32), state.params)
@@ -97,11 +102,11 @@ def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTran
 def make_eval_step(graphdef: nnx.GraphDef, score: Score, compute_dtype: jnp.dtype, mesh: Mesh,
                    state_sharding: Any, frozen_sharding: Any, batch_sharding: Any) -> Callable:
     """jit(eval)(params, frozen, batch) -> (nll sum, correct sum, scored tokens) over all micro-batches."""
-    micro_spec = lambda x: NamedSharding(mesh, P(BATCH_AXES, *([None] * (x.ndim - 2))))
+    micro_spec = _micro_shardings(batch_sharding)
 
     def evaluate(params, frozen, batch):
         def body(carry, micro):
-            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec(batch[k])) for k, v in micro.items()}
+            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec[k]) for k, v in micro.items()}
             model = nnx.merge(graphdef, cast_floats(params, compute_dtype), cast_floats(frozen, compute_dtype))
             nll, correct = score(model, micro)
             return (carry[0] + nll, carry[1] + correct), None
