@@ -114,7 +114,44 @@ def program_text(image: Image.Image, code_model_dir: str | Path | None, generate
     return generate_program(CODE_PROMPT)
 
 
-def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: float, out: Path, wrote) -> str:
+class _Outputs:
+    """The files of one prediction: each is written, recorded under its name and announced to the
+    listener (the CLI prints them) as soon as it exists."""
+
+    def __init__(self, out: Path, on_output: OutputListener | None):
+        self.out = out
+        self.files: dict[str, Path] = {}
+        self.on_output = on_output
+
+    def wrote(self, name: str, path: Path) -> Path:
+        self.files[name] = path
+        if self.on_output is not None:
+            self.on_output(name, path)
+        return path
+
+    def text(self, name: str, filename: str, text: str) -> Path:
+        (self.out / filename).write_text(text, encoding="utf-8")
+        return self.wrote(name, self.out / filename)
+
+    def binary(self, name: str, filename: str, data: bytes) -> Path:
+        (self.out / filename).write_bytes(data)
+        return self.wrote(name, self.out / filename)
+
+
+class _Progress:
+    """A bar over STEPS on stderr (only on a terminal, and only when asked)."""
+
+    def __init__(self, enabled: bool):
+        self.bar = tqdm(total=len(STEPS), desc="predict", unit="step", leave=False,
+                        disable=None if enabled else True)  # None: only on a terminal
+
+    def step(self, name: str) -> None:
+        self.bar.set_postfix_str(name)
+        self.bar.n = STEPS.index(name)
+        self.bar.refresh()
+
+
+def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: float, outputs: _Outputs) -> str:
     """The candidate the physics verdict prefers; candidates.json holds every one's row and the reason."""
     from eval.verified.select import Candidate, choose
 
@@ -123,20 +160,94 @@ def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: 
     rows = [{"parsed": r.parsed, "rule": r.rule, "physics_ok": r.ok, "flagged_joints": r.flagged, "logprob": round(r.logprob, 4),
              "text": c.text} for r, c in zip(choice.rows, candidates)]
     doc = {"winner": choice.index, "reason": choice.reason, "candidates": rows}
-    (out / "candidates.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    wrote("candidates", out / "candidates.json")
+    outputs.text("candidates", "candidates.json", json.dumps(doc, indent=1) + "\n")
     return candidates[choice.index].text
 
 
-def _repaired(structure: Structure, parts: dict, boxes: dict, metres: float, out: Path, wrote) -> Structure:
+def _repaired(structure: Structure, parts: dict, boxes: dict, metres: float, outputs: _Outputs) -> Structure:
     """``structure`` with flagged hinges repaired where the verdict improves; repairs.json lists them."""
     from eval.verified.repair import repair
 
     fixed = repair(structure, parts, metres, False, boxes)
-    doc = [r.to_dict() for r in fixed.repairs]
-    (out / "repairs.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
-    wrote("repairs", out / "repairs.json")
+    outputs.text("repairs", "repairs.json", json.dumps([r.to_dict() for r in fixed.repairs], indent=1) + "\n")
     return fixed.structure
+
+
+@dataclass(frozen=True)
+class _StructureSettings:
+    """predict's arguments for stage 2 (see predict)."""
+
+    model_dir: str | Path | None
+    generate: TextModel | None
+    max_new_tokens: int
+    constrained: bool
+    candidates: int
+    repair: bool
+    scale: float | None
+
+
+def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, code_model_dir: str | Path | None,
+            generate_program: TextModel | None, max_new_tokens: int, constrained: bool, mesh_up: str,
+            checkpoints: Checkpoints, outputs: _Outputs) -> tuple[Image.Image, bytes, str, Stage1]:
+    """I (image.png) and the part meshes (parts/, program.txt for the code backend):
+    (I in RGB, its PNG bytes, the sha256 of the input, the parts)."""
+    rgb, digest = _image_and_digest(image)
+    image_png = png_bytes(np.asarray(rgb))  # I as the models saw it (RGB): the viewer shows it
+    target = outputs.out / "image.png"
+    if isinstance(image, (str, Path)) and Path(image).resolve() == target.resolve():
+        outputs.wrote("image", target)  # never written over the input itself
+    else:
+        outputs.binary("image", "image.png", image_png)
+    if backend == CODE:
+        program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, checkpoints, constrained)
+        outputs.text("program", "program.txt", program)  # kept even when it fails to run
+        parts_in = stage1_from_program(program)
+    elif backend == MESH:
+        parts_in = stage1_from_mesh(source, mesh_up)
+    else:
+        parts_in = stage1_from_parts_dir(source)
+    return rgb, image_png, digest, parts_in
+
+
+def _stage2(result: PredictResult, rgb: Image.Image, seg: np.ndarray, boxes: dict, settings: _StructureSettings,
+            checkpoints: Checkpoints, outputs: _Outputs, progress: _Progress) -> None:
+    """Structure model -> structure.json, exports and physics.json, filling ``result``; raises a
+    Jax3dcError at the first step that fails (the outputs before it stay)."""
+    progress.step("structure model")
+    parts_in = result.stage1
+    metres = settings.scale if settings.scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
+    generate = settings.generate
+    if generate is None:
+        if settings.model_dir is None:
+            raise InputFileError("--structure-model", "a structure model checkpoint (--structure-model DIR) is needed")
+        generator = checkpoints.get(settings.model_dir)
+        seg_image = Image.fromarray(seg)
+        if settings.candidates > 1:
+            replies = structure_candidates(generator, rgb, seg_image, settings.max_new_tokens, settings.candidates,
+                                           settings.constrained)(result.prompt)
+            result.raw_text = _chosen(replies, parts_in.parts, boxes, metres, outputs)
+        else:
+            generate = structure_model(generator, rgb, seg_image, settings.max_new_tokens, settings.constrained)
+    if result.raw_text is None:
+        result.raw_text = generate(result.prompt)
+    try:
+        parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
+    except StructureError as e:
+        raw = outputs.text("structure_raw", "structure_raw.txt", result.raw_text)
+        raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in {raw})") from None
+    progress.step("exports")
+    structure = canonicalize(parsed, boxes)
+    if settings.repair:
+        structure = _repaired(structure, parts_in.parts, boxes, metres, outputs)
+    outputs.text("structure", "structure.json", to_json(structure))
+    result.structure = structure
+    named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
+                                      for pid, n in structure.nodes.items()})
+    for name, path in write_exports(named, parts_in.parts, outputs.out, metres).items():
+        outputs.wrote(name, path)
+    progress.step("physics")
+    path, result.verdict = write_physics(structure, parts_in.parts, outputs.out, metres)
+    outputs.wrote("physics", path)
 
 
 def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
@@ -163,105 +274,45 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
-    backend, source = parse_stage1(stage1)
+    backend, source = parse_stage1(stage1)  # a bad --stage1 is refused before anything is written
     out.mkdir(parents=True, exist_ok=True)
-    files: dict[str, Path] = {}
+    outputs = _Outputs(out, on_output)
     checkpoints = Checkpoints(dtype)
-
-    def wrote(name: str, path: Path) -> None:
-        files[name] = path
-        if on_output is not None:
-            on_output(name, path)
-
-    bar = tqdm(total=len(STEPS), desc="predict", unit="step", leave=False,
-               disable=None if progress else True)  # None: only on a terminal
-
-    def step(name: str) -> None:
-        bar.set_postfix_str(name)
-        bar.n = STEPS.index(name)
-        bar.refresh()
-
+    steps = _Progress(progress)
+    settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
+                                  repair, scale)
     try:
-        step("stage 1")
-        rgb, digest = _image_and_digest(image)
-        image_png = png_bytes(np.asarray(rgb))  # I as the models saw it (RGB): the viewer shows it
-        if not (isinstance(image, (str, Path)) and Path(image).resolve() == (out / "image.png").resolve()):
-            (out / "image.png").write_bytes(image_png)  # (never over the input itself)
-        wrote("image", out / "image.png")
-        if backend == CODE:
-            program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, checkpoints, constrained)
-            (out / "program.txt").write_text(program, encoding="utf-8")  # kept even when it fails to run
-            wrote("program", out / "program.txt")
-            parts_in = stage1_from_program(program)
-        elif backend == MESH:
-            parts_in = stage1_from_mesh(source, mesh_up)
-        else:
-            parts_in = stage1_from_parts_dir(source)
+        steps.step("stage 1")
+        rgb, image_png, digest, parts_in = _stage1(image, backend, source, code_model_dir, generate_program,
+                                                   max_new_tokens, constrained, mesh_up, checkpoints, outputs)
         palette = object_palette(PALETTE_CATEGORY, digest)
         boxes = part_boxes(parts_in.parts)
         camera_given = camera is not None
         camera = camera or default_camera(parts_in.parts)
-        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), files)
-        (out / "prompt.txt").write_text(result.prompt, encoding="utf-8")
-        wrote("prompt", out / "prompt.txt")
+        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), outputs.files)
+        outputs.text("prompt", "prompt.txt", result.prompt)
         save_parts(parts_in.parts, out / "parts")
-        wrote("parts", out / "parts")
-        step("segmentation")
+        outputs.wrote("parts", out / "parts")
+        steps.step("segmentation")
         width, height = seg_size(rgb)
         seg, _ids = render_segmentation(parts_in.parts, camera, palette, width, height=height)
         seg_png = png_bytes(seg)
-        (out / "seg.png").write_bytes(seg_png)
-        wrote("seg", out / "seg.png")
+        outputs.binary("seg", "seg.png", seg_png)
 
         error: Jax3dcError | None = None
         try:
-            step("structure model")
-            metres = scale if scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
-            if generate_structure is None:
-                if structure_model_dir is None:
-                    raise InputFileError("--structure-model",
-                                         "a structure model checkpoint (--structure-model DIR) is needed")
-                generator = checkpoints.get(structure_model_dir)
-                if candidates > 1:
-                    replies = structure_candidates(generator, rgb, Image.fromarray(seg), max_new_tokens, candidates,
-                                                   constrained)(result.prompt)
-                    result.raw_text = _chosen(replies, parts_in.parts, boxes, metres, out, wrote)
-                else:
-                    generate_structure = structure_model(generator, rgb, Image.fromarray(seg), max_new_tokens, constrained)
-            if result.raw_text is None:
-                result.raw_text = generate_structure(result.prompt)
-            try:
-                parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
-            except StructureError as e:
-                (out / "structure_raw.txt").write_text(result.raw_text, encoding="utf-8")
-                wrote("structure_raw", out / "structure_raw.txt")
-                raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in "
-                                     f"{out / 'structure_raw.txt'})") from None
-            step("exports")
-            structure = canonicalize(parsed, boxes)
-            if repair:
-                structure = _repaired(structure, parts_in.parts, boxes, metres, out, wrote)
-            (out / "structure.json").write_text(to_json(structure), encoding="utf-8")
-            wrote("structure", out / "structure.json")
-            result.structure = structure
-            named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
-                                              for pid, n in structure.nodes.items()})
-            for name, path in write_exports(named, parts_in.parts, out, metres).items():
-                wrote(name, path)
-            step("physics")
-            path, result.verdict = write_physics(structure, parts_in.parts, out, metres)
-            wrote("physics", path)
+            _stage2(result, rgb, seg, boxes, settings, checkpoints, outputs, steps)
         except Jax3dcError as e:
             error = e
-        step("report")
+        steps.step("report")
         report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), camera_given,
                               result.structure, result.verdict, None if error is None else str(error))
         for name, path in write_report(report, out).items():
-            wrote(name, path)
-        if "glb" in files:  # the viewer articulates the exported object: nothing to show without a structure
-            wrote("viewer", write_viewer_page(out, files["glb"], result.verdict, image_png, seg_png))
+            outputs.wrote(name, path)
+        if "glb" in outputs.files:  # the viewer articulates the exported object: nothing to show without a structure
+            outputs.wrote("viewer", write_viewer_page(out, outputs.files["glb"], result.verdict, image_png, seg_png))
     finally:
-        bar.close()  # before the caller prints an error line
+        steps.bar.close()  # before the caller prints an error line
     if error is not None:
         raise error
     return result
