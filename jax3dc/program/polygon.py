@@ -41,6 +41,19 @@ def is_simple(points: np.ndarray) -> bool:
     return not bool(np.any(proper | touching))
 
 
+def is_convex(points: np.ndarray) -> bool:
+    """Strictly convex and simple: every turn has the same sense and they add up to one turn.
+
+    O(n), so the common profiles (circles of sweeps, rectangles) skip the O(n^2) is_simple.
+    """
+    edges = np.roll(points, -1, axis=0) - points
+    cross = edges[:, 0] * np.roll(edges[:, 1], -1) - edges[:, 1] * np.roll(edges[:, 0], -1)
+    if not (np.all(cross > 1e-14) or np.all(cross < -1e-14)):
+        return False
+    dot = np.einsum("ij,ij->i", edges, np.roll(edges, -1, axis=0))
+    return bool(abs(np.abs(np.arctan2(cross, dot)).sum() - 2 * np.pi) < 1e-6)
+
+
 def triangulate(points: np.ndarray) -> np.ndarray:
     """Triangles (index triples, counter-clockwise) covering a simple polygon, by mapbox-earcut.
 
@@ -56,7 +69,7 @@ def triangulate(points: np.ndarray) -> np.ndarray:
         raise ValueError("a polygon needs at least 3 vertices")
     if abs(signed_area(pts)) < 1e-14:
         raise ValueError("the polygon has zero area")
-    if not is_simple(pts):
+    if not is_convex(pts) and not is_simple(pts):
         raise ValueError("the polygon is not simple (its edges cross)")
     tris = mapbox_earcut.triangulate_float64(pts, np.array([n], dtype=np.uint32)).reshape(-1, 3).astype(np.int64)
     if len(tris) != n - 2:

@@ -4,7 +4,7 @@ exactly (shoelace area), use every vertex, and crossing outlines are refused."""
 import numpy as np
 import pytest
 
-from jax3dc.program.polygon import is_simple, signed_area, triangulate
+from jax3dc.program.polygon import is_convex, is_simple, signed_area, triangulate
 
 
 def cross2(a, b):
@@ -58,8 +58,9 @@ def test_crossing_outlines_are_refused():
     star = [(np.cos(t), np.sin(t)) for t in np.linspace(0, 4 * np.pi, 5, endpoint=False)]  # pentagram
     bowtie = [(0, 0), (3, 2), (3, 0), (0, 1)]  # unequal lobes, so its signed area is not zero
     touching = [(0, 0), (2, 0), (2, 2), (1, 0), (0, 2)]  # a vertex on a non-adjacent edge
-    for outline in (star, bowtie, touching):
-        assert not is_simple(np.asarray(outline, float))
+    for outline in (star, bowtie, touching):  # the pentagram turns left at every corner: not convex either
+        assert not is_simple(np.asarray(outline, float)) and not is_convex(np.asarray(outline, float))
         with pytest.raises(ValueError, match="simple"):
             triangulate(outline)
-    assert is_simple(np.asarray(SHAPES["comb"], float))
+    assert is_simple(np.asarray(SHAPES["comb"], float)) and not is_convex(np.asarray(SHAPES["comb"], float))
+    assert is_convex(np.asarray(SHAPES["circle_cw"], float))
