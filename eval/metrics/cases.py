@@ -35,23 +35,64 @@ class Reference:
     boxes: dict[int, Box]
 
 
+MAX_LINE_BYTES = 8 << 20
+"""Longest line read: a reference holds a structure of at most 1 MB (MAX_DOCUMENT_BYTES) and boxes of
+at most 4 MB (MAX_BOXES_BYTES)."""
+
+
+def _unique_members(items: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in items:
+        if k in out:
+            raise ValueError(f"key {k!r} appears twice in one object")
+        out[k] = v
+    return out
+
+
+def _no_constant(name: str) -> None:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def _parse_line(raw: bytes) -> Any:
+    """One JSON value of a line; any problem is a ValueError saying what it is."""
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ValueError(f"not UTF-8 text (byte {e.start})") from None
+    try:
+        return json.loads(text, object_pairs_hook=_unique_members, parse_constant=_no_constant)
+    except json.JSONDecodeError as e:
+        raise ValueError(f"not JSON ({e.msg})") from None
+    except RecursionError:
+        raise ValueError("not JSON (nested too deeply)") from None
+    except ValueError as e:  # _unique_members, _no_constant, or an integer of more than 4300 digits
+        raise ValueError(f"not JSON ({e})") from None
+
+
 def read_jsonl(path: str | Path) -> Iterator[tuple[int, dict[str, Any]]]:
     """(line number, object) for every non-blank line; each must be a JSON object with a key."""
     path = Path(path)
     try:
-        handle = path.open(encoding="utf-8")
+        handle = path.open("rb")
     except OSError as e:
         raise InputFileError(path, f"cannot read: {e.strerror or e}") from None
     with handle:
-        for number, line in enumerate(handle, start=1):
+        for number, line in enumerate(iter(lambda: handle.readline(MAX_LINE_BYTES + 1), b""), start=1):
+            if len(line) > MAX_LINE_BYTES:
+                raise InputFileError(path, f"line {number} is over {MAX_LINE_BYTES} bytes (MAX_LINE_BYTES)")
             if not line.strip():
                 continue
             try:
-                item = json.loads(line)
-            except json.JSONDecodeError as e:
-                raise InputFileError(path, f"line {number}: not JSON ({e.msg})") from None
+                item = _parse_line(line)
+            except ValueError as e:
+                raise InputFileError(path, f"line {number}: {e}") from None
             if not isinstance(item, dict) or not isinstance(item.get("key"), str):
                 raise InputFileError(path, f'line {number}: expected an object with a string "key"')
+            try:
+                item["key"].encode("utf-8")
+            except UnicodeEncodeError as e:  # JSON's "\ud800" escape decodes to a lone surrogate
+                raise InputFileError(path, f'line {number}: "key" is not valid Unicode text (a lone surrogate at '
+                                           f"character {e.start})") from None
             yield number, item
 
 

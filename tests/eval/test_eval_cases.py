@@ -5,7 +5,8 @@ import random
 
 import pytest
 
-from eval.metrics.cases import MISSING_RULE, Reference, build_cases, json_text, load_predictions, load_references
+from eval.metrics.cases import (MAX_LINE_BYTES, MISSING_RULE, Reference, build_cases, json_text, load_predictions,
+                                load_references)
 from eval.metrics.score import evaluate
 from jax3dc.errors import InputFileError
 from jax3dc.structure import boxes_from_dict, canonicalize, parse_structure
@@ -177,3 +178,19 @@ def test_file_errors_name_file_and_line(tmp_path):
         load_predictions(pred)
     with pytest.raises(InputFileError, match="cannot read"):
         load_predictions(tmp_path / "absent.jsonl")
+
+
+@pytest.mark.parametrize("line, message", [
+    (b'{"key": "a", "text": NaN}', r"line 2: not JSON \(NaN is not a JSON number\)"),
+    (b'{"key": "a", "text": "x", "text": "y"}', r"line 2: not JSON \(key 'text' appears twice"),
+    (b'{"key": "a", "n": ' + b"9" * 5000 + b"}", r"line 2: not JSON \(Exceeds the limit"),
+    (b'{"key": ' + b"[" * 100_000 + b"]" * 100_000 + b"}", r"line 2: not JSON \(nested too deeply\)"),
+    (b'{"key": "\xff"}', r"line 2: not UTF-8 text \(byte 9\)"),
+    (b'{"key": "\\ud800", "text": "x"}', "line 2: \"key\" is not valid Unicode text \\(a lone surrogate"),
+    (b'{"key": "a", "text": "' + b"x" * MAX_LINE_BYTES + b'"}', f"line 2 is over {MAX_LINE_BYTES} bytes"),
+])
+def test_hostile_lines_name_the_problem(tmp_path, line, message):
+    pred = tmp_path / "pred.jsonl"
+    pred.write_bytes(b'{"key": "b", "text": "x"}\n' + line + b"\n")
+    with pytest.raises(InputFileError, match=message):
+        load_predictions(pred)

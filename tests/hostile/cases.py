@@ -7,8 +7,10 @@ command writes (if at all) under ``root / "out" / <case>``.
 
 from __future__ import annotations
 
+import json
 import os
 import struct
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -287,9 +289,123 @@ def _import_cases(inputs: Path, out: Path) -> list[Case]:
     return cases
 
 
+def _metric_line(key: str = '"a"', structure: str | None = None, boxes: str | None = None) -> str:
+    """A reference line for the two-part structure of ``_structure``."""
+    box = '{"centroid":[0,0,0],"extent":[1,1,1]}'
+    return ('{"key":' + key + ',"structure":' + (structure or _structure()) + ',"boxes":'
+            + (boxes or '{"1":' + box + ',"2":' + box + '}') + "}\n")
+
+
+def _metric_files() -> dict[str, tuple[bytes, str]]:
+    """name -> (JSONL content, words expected); each is tried as --ref and as --pred."""
+    return {
+        "bad_json": (b'{"key":"a",\n', "not JSON"),
+        "deep": (b'{"key":"a","structure":' + b"[" * 100_000 + b"]" * 100_000 + b"}\n", "nested too deeply"),
+        "huge_int": (_metric_line(boxes='{"1":{"centroid":[' + "9" * 5000 + ',0,0],"extent":[1,1,1]}}').encode(),
+                     "4300 digits"),
+        "nan": (b'{"key":"a","score":NaN}\n', "NaN"),
+        "infinity": (_metric_line(boxes='{"1":{"centroid":[0,-Infinity,0],"extent":[1,1,1]}}').encode(), "Infinity"),
+        "surrogate_key": (_metric_line(key='"\\ud800"').encode(), "lone surrogate"),
+        "missing_key": (b'{"structure":{},"boxes":{}}\n', '"key"'),
+        "key_not_string": (_metric_line(key="7").encode(), '"key"'),
+        "top_list": (b"[1,2,3]\n", '"key"'),
+        "duplicate_member": (_metric_line().replace('"key":"a"', '"key":"a","key":"b"').encode(), "appears twice"),
+        "duplicate_line": (_metric_line().encode() * 2, "duplicate key"),
+        "long_line": (b'{"key":"a","text":"' + b"x" * (40 << 20) + b'"}\n', "bytes"),
+        "not_utf8": (b'{"key":"\xff\xfe"}\n', "not UTF-8"),
+    }
+
+
+def _metric_cases(inputs: Path, out: Path) -> list[Case]:
+    folder = inputs / "metrics"
+    folder.mkdir()
+    good_ref, good_pred = folder / "ref.jsonl", folder / "pred.jsonl"
+    good_ref.write_text(_metric_line())
+    good_pred.write_text('{"key":"a","text":' + json.dumps(_structure()) + "}\n")
+    cases = []
+    for name, (data, expect) in _metric_files().items():
+        path = folder / f"{name}.jsonl"
+        path.write_bytes(data)
+        cases.append(Case("eval metrics", f"ref_{name}", ("eval", "metrics", "--ref", str(path), "--pred",
+                                                           str(good_pred), "--out", str(out / f"ref_{name}")), expect))
+        cases.append(Case("eval metrics", f"pred_{name}", ("eval", "metrics", "--ref", str(good_ref), "--pred",
+                                                            str(path), "--out", str(out / f"pred_{name}")), expect))
+    refs = {
+        "no_boxes": (_metric_line(boxes="{}"), "no box for parts"),
+        "structure_list": (_metric_line(structure="[]"), '"structure" and "boxes"'),
+        "boxes_string": (_metric_line(boxes='"boxes"'), '"structure" and "boxes"'),
+        "box_wrong_type": (_metric_line(boxes='{"1":{"centroid":"0 0 0","extent":[1,1,1]}}'), "centroid"),
+        "invalid_structure": (_metric_line(structure=_structure().replace("Wood", "Unobtainium")), "family"),
+        "empty": ("\n\n", "no reference lines"),
+    }
+    for name, (text, expect) in refs.items():
+        path = folder / f"ref_{name}.jsonl"
+        path.write_text(text)
+        cases.append(Case("eval metrics", name, ("eval", "metrics", "--ref", str(path), "--pred", str(good_pred),
+                                                 "--out", str(out / name)), expect))
+    cases += [
+        Case("eval metrics", "text_not_string", ("eval", "metrics", "--ref", str(good_ref), "--pred",
+                                                 str(_write(folder / "pred_type.jsonl", '{"key":"a","text":5}\n')),
+                                                 "--out", str(out / "text_type")), '"text" or "structure"'),
+        Case("eval metrics", "missing_ref", ("eval", "metrics", "--ref", str(folder / "absent.jsonl"), "--pred",
+                                             str(good_pred), "--out", str(out / "missing")), "absent.jsonl"),
+        Case("eval metrics", "ref_directory", ("eval", "metrics", "--ref", str(folder), "--pred", str(good_pred),
+                                               "--out", str(out / "directory")), "metrics"),
+        Case("eval metrics", "out_is_file", ("eval", "metrics", "--ref", str(good_ref), "--pred", str(good_pred),
+                                             "--out", str(good_ref)), "cannot write"),
+    ]
+    return cases
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def _png(width: int, height: int, rows: bytes | None = None) -> bytes:
+    """A 1-bit greyscale PNG of ``width`` x ``height`` black pixels, compressed as it is built
+    (a 12000 x 12000 image is 18 MB raw and a few kB on disk); ``rows`` replaces the pixel data."""
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    if rows is None:
+        packer, row = zlib.compressobj(9), b"\0" * (1 + (width + 7) // 8)
+        rows = b"".join(packer.compress(row) for _ in range(height)) + packer.flush()
+    header = struct.pack(">IIBBBBB", width, height, 1, 0, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", rows) + chunk(b"IEND", b"")
+
+
+def _image_cases(inputs: Path, out: Path) -> list[Case]:
+    """``predict`` reads the image before any model: a missing model folder is never reached."""
+    folder = inputs / "images"
+    folder.mkdir()
+    whole = _png(2000, 2000)
+    images = {
+        "huge_pixels.png": (_png(12000, 12000), "pixels"),
+        "giant_header.png": (_png(100_000, 100_000, rows=zlib.compress(b"\0" * 64)), "pixels"),
+        "truncated.png": (whole[:len(whole) // 2], "truncated"),
+        "zero_bytes.png": (b"", "not an image file"),
+        "text.png": (b"this is not a picture\n", "not an image file"),
+        "bad_rows.png": (_png(64, 64, rows=zlib.compress(b"\1" * 10)), "corrupt image data"),
+    }
+    cases = []
+    for name, (data, expect) in images.items():
+        (folder / name).write_bytes(data)
+        stem = name.removesuffix(".png")
+        cases.append(Case("predict image", stem, ("predict", str(folder / name), "--stage1", f"parts:{folder}/none",
+                                                  "--structure-model", str(folder / "no_model"),
+                                                  "--out", str(out / f"image_{stem}")), expect))
+    cases.append(Case("predict image", "missing", ("predict", str(folder / "absent.png"), "--stage1",
+                                                   f"parts:{folder}/none", "--structure-model",
+                                                   str(folder / "no_model"), "--out", str(out / "image_missing")),
+                      "image file not found"))
+    return cases
+
+
 def build_cases(root: Path) -> list[Case]:
     """Write every hostile input under ``root / "in"``; outputs may go only under ``root / "out"``."""
     inputs, out = root / "in", root / "out"
     inputs.mkdir(parents=True)
     out.mkdir()
-    return _program_cases(inputs, out) + _structure_cases(inputs, out) + _import_cases(inputs, out)
+    return (_program_cases(inputs, out) + _structure_cases(inputs, out) + _import_cases(inputs, out)
+            + _metric_cases(inputs, out) + _image_cases(inputs, out))
