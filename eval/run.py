@@ -132,6 +132,9 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
 
     if args.candidates > 1 or args.repair:
         raise Jax3dcError("--candidates and --repair choose structures; the code task takes neither")
+    missing = [r.key for r in records if not r.program]
+    if missing:
+        raise InputFileError(", ".join(args.data), f"{len(missing)} records have no part program (first: {missing[0]})")
     if args.predictions is not None:
         texts, name = load_predictions(args.predictions), Path(args.predictions).stem
     elif args.reference_as_prediction:
@@ -143,9 +146,6 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
                                             DecodeOptions(constrained=not args.unconstrained), "code")
         print(("unconstrained" if args.unconstrained else "part-program grammar") + " decoding; " + stats.summary())
         texts, name = {key: line["text"] for key, line in lines.items()}, Path(args.checkpoint).name
-    missing = [r.key for r in records if not r.program]
-    if missing:
-        raise InputFileError(", ".join(args.data), f"{len(missing)} records have no part program (first: {missing[0]})")
     scores = [score_program(r.key, r.program, texts.get(r.key, "")) for r in tqdm(records, desc="running programs", unit="obj")]
     metrics = summarise(scores)
     with (out / "programs.jsonl").open("w", encoding="utf-8") as f:
