@@ -12,6 +12,7 @@ import os
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
@@ -41,22 +42,36 @@ def _files(root: Path) -> dict[str, tuple[int, int]]:
     return found
 
 
+def _wait(pid: int, timeout: float) -> tuple[int | None, int]:
+    """Reap ``pid`` within ``timeout`` seconds (killing it after); its exit code (None on a hang) and its own
+    peak resident memory in bytes. ``os.wait4`` gives this child's usage alone, where ``RUSAGE_CHILDREN``
+    would give the largest of every child this test process ever reaped."""
+    deadline = time.perf_counter() + timeout
+    while True:
+        done, status, usage = os.wait4(pid, os.WNOHANG)
+        if done:
+            return os.waitstatus_to_exitcode(status), usage.ru_maxrss * 1024
+        if time.perf_counter() > deadline:
+            os.kill(pid, 9)
+            _, _, usage = os.wait4(pid, 0)
+            return None, usage.ru_maxrss * 1024
+        time.sleep(0.02)
+
+
 def _run(case: Case, cwd: Path) -> dict:
     env = {**os.environ, "PYTHONWARNINGS": "default"}  # a warning printed before the error line must show
     start = time.perf_counter()
-    process = subprocess.Popen([sys.executable, "-m", "jax3dc.cli", *case.argv], cwd=cwd, env=env,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, preexec_fn=_limit_address_space)
-    try:
-        _, err = process.communicate(timeout=TIME_LIMIT_S)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        _, err = process.communicate()
-        return {"case": case, "hang": True, "seconds": TIME_LIMIT_S, "rc": None, "err": err.decode(errors="replace"),
-                "peak": 0}
-    seconds = time.perf_counter() - start
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024  # an upper bound on this child's peak
-    return {"case": case, "hang": False, "seconds": seconds, "rc": process.returncode,
-            "err": err.decode(errors="replace"), "peak": peak}
+    with tempfile.TemporaryFile() as err_file:
+        process = subprocess.Popen([sys.executable, "-m", "jax3dc.cli", *case.argv], cwd=cwd, env=env,
+                                   stdout=subprocess.DEVNULL, stderr=err_file, preexec_fn=_limit_address_space)
+        rc, peak = _wait(process.pid, TIME_LIMIT_S)
+        process.returncode = rc if rc is not None else -9  # reaped here: Popen must not wait on it again
+        seconds = time.perf_counter() - start
+        err_file.seek(0)
+        err = err_file.read().decode(errors="replace")
+    if rc is None:
+        return {"case": case, "hang": True, "seconds": TIME_LIMIT_S, "rc": None, "err": err, "peak": peak}
+    return {"case": case, "hang": False, "seconds": seconds, "rc": rc, "err": err, "peak": peak}
 
 
 def _problems(result: dict) -> list[str]:
