@@ -3,7 +3,6 @@
 import copy
 import json
 import math
-import time
 
 import pytest
 
@@ -200,16 +199,14 @@ def test_bytes_and_non_utf8():
     assert [e.rule for e in validate(b'{"nodes": "\xff"}')] == ["json"]
 
 
-def test_large_document_rejected_quickly_with_size_message():
+def test_large_document_rejected_with_size_message():
     big = json.dumps(valid_doc())[:-1] + ',"pad":"' + "x" * (10 * 1024 * 1024) + '"}'
-    t0 = time.perf_counter()
-    errors = validate(big)
-    assert time.perf_counter() - t0 < 1.0
+    errors = validate(big)  # refused by its size before parsing; time in bench/structure_validate.py
     assert [e.rule for e in errors] == ["document_size"]
     assert str(MAX_DOCUMENT_BYTES) in str(errors[0])
 
 
-def test_largest_allowed_document_parses_fast():
+def test_largest_allowed_document_parses_without_recursion():
     n = 3000  # ~ 0.4 MB with a joint on every node: far beyond any real scene
     nodes = {"1": {"parent": None, "material": 0}}
     for i in range(2, n + 1):
@@ -217,9 +214,7 @@ def test_largest_allowed_document_parses_fast():
                          "joint": {"type": "slide", "axis": [0.577, 0.577, 0.577], "pivot": [0.1, 0.2, 0.3], "range": [0, 0.5]}}
     text = json.dumps({"materials": {"0": {"family": "Wood"}}, "nodes": nodes, "relations": []})
     assert len(text) < MAX_DOCUMENT_BYTES
-    t0 = time.perf_counter()
-    s = parse_structure(text, part_ids=range(1, n + 1))
-    assert time.perf_counter() - t0 < 2.0
+    s = parse_structure(text, part_ids=range(1, n + 1))  # its time: bench/structure_validate.py
     assert len(s.joints()) == n - 1
     # a long cycle is found without recursion
     nodes["1"]["parent"] = n
@@ -235,12 +230,10 @@ def test_huge_integer_literal_is_a_structure_error():
     assert ("pivot_finite", "node 2 joint.pivot") in rules(doc)
 
 
-def test_many_relations_check_in_linear_time():
+def test_many_relations_check():
     doc = valid_doc()
     doc["relations"] = [{"type": "instance", "a": 1 + k % 5, "b": 1 + (k + 1) % 5} for k in range(20000)]
-    t0 = time.perf_counter()
-    assert validate(doc) == []
-    assert time.perf_counter() - t0 < 2.0
+    assert validate(doc) == []  # its time: bench/structure_validate.py
 
 
 def test_deeply_nested_json_is_a_structure_error():
