@@ -34,7 +34,7 @@ import numpy as np  # noqa: E402
 from flax import nnx  # noqa: E402
 
 from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
-from jax3dc.model.generate import GenerationConfig, decode, prefill, prefill_in_chunks  # noqa: E402
+from jax3dc.generate import GenerationConfig, decode, prefill, prefill_in_chunks  # noqa: E402
 from jax3dc.model.params import param_count  # noqa: E402
 from jax3dc.model.qwen3_vl import Qwen3VL  # noqa: E402
 from jax3dc.model.random_weights import build_random  # noqa: E402

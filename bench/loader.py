@@ -29,8 +29,8 @@ def build_data(folder: Path, objects: int, workers: int) -> None:
 def measure(data: str, workers: int, batches: int, seq_len: int, rows: int, pack: int, pixel_dtype: str) -> dict:
     from data_pipeline.loader import LoaderConfig, ShardLoader
     from jax3dc.model.config import Qwen3VLConfig
-    from jax3dc.model.processor import ImageProcessorConfig
-    from jax3dc.model.tokenizer import load_tokenizer
+    from jax3dc.processing.processor import ImageProcessorConfig
+    from jax3dc.processing.tokenizer import load_tokenizer
 
     cfg = LoaderConfig(sources=(data,), seq_len=seq_len, rows=rows, pack=pack, image_size=448, workers=workers, pixel_dtype=pixel_dtype,
                        worker_buffer=2)

@@ -32,11 +32,11 @@ import numpy as np
 from data_pipeline.factories import FACTORIES, generate_object
 from data_pipeline.samples import split_of
 from jax3dc.geometry.parts import part_boxes
-from jax3dc.model.bpe import chat_segments, config_for_tokenizer, train_bpe
-from jax3dc.model.chat import render_chat
+from jax3dc.processing.bpe import chat_segments, config_for_tokenizer, train_bpe
+from jax3dc.processing.chat import render_chat
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.params import abstract_model, param_count
-from jax3dc.model.tokenizer import Tokenizer, load_tokenizer
+from jax3dc.processing.tokenizer import Tokenizer, load_tokenizer
 from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt, chat_messages, code_messages
 from jax3dc.relations import with_extracted_relations

@@ -27,7 +27,7 @@ import optax
 from flax import nnx
 from jax.sharding import NamedSharding, PartitionSpec as P
 
-from jax3dc.model.bench import image_batch
+from bench.model_step import image_batch
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.random_weights import build_random

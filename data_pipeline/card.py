@@ -32,7 +32,7 @@ def _summary(values: list[int]) -> dict:
 def dataset_card(directory: Path, samples: int = 16, thumb: int = 128, progress: bool = True) -> dict:
     """Write ``card.json`` and ``contact_sheet.png`` (I above S for ``samples`` records) into
     ``directory``; returns the statistics."""
-    from jax3dc.model.tokenizer import load_tokenizer
+    from jax3dc.processing.tokenizer import load_tokenizer
 
     manifest = load_manifest(directory)
     if manifest is None:

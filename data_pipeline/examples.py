@@ -5,7 +5,7 @@ Two tasks read the same records (SPEC §4, §6):
 * ``structure`` (stage 2): images I and S, the record's prompt -> the target JSON;
 * ``code`` (stage-1 code backend): image I and CODE_PROMPT -> the record's part program.
 
-The chat is built exactly as generation builds it (jax3dc.prompt + jax3dc.model.chat), so a
+The chat is built exactly as generation builds it (jax3dc.prompt + jax3dc.processing.chat), so a
 model sees at inference the very tokens it was trained on, up to the assistant answer.
 """
 
@@ -20,9 +20,9 @@ from PIL import Image
 from data_pipeline.packing import Example
 from data_pipeline.record import Record
 from jax3dc.errors import Jax3dcError
-from jax3dc.model.chat import encode_chat
-from jax3dc.model.processor import ImageProcessorConfig, preprocess_images
-from jax3dc.model.tokenizer import Tokenizer
+from jax3dc.processing.chat import encode_chat
+from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images
+from jax3dc.processing.tokenizer import Tokenizer
 from jax3dc.prompt import chat_messages, code_messages
 
 TASKS = ("structure", "code")

@@ -31,8 +31,8 @@ from data_pipeline.record import CorruptRecordError, decode_record
 from data_pipeline.shards import shard_paths
 from jax3dc.errors import Jax3dcError
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.processor import ImageProcessorConfig, smart_resize
-from jax3dc.model.tokenizer import Tokenizer
+from jax3dc.processing.processor import ImageProcessorConfig, smart_resize
+from jax3dc.processing.tokenizer import Tokenizer
 
 log = logging.getLogger(__name__)
 

@@ -22,7 +22,7 @@ from typing import Sequence
 
 import numpy as np
 
-from jax3dc.model.chat import IGNORE_INDEX
+from jax3dc.processing.chat import IGNORE_INDEX
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""``jax3dc data tokenizer``: learn a byte-level BPE (jax3dc.model.bpe) from datasets' texts."""
+"""``jax3dc data tokenizer``: learn a byte-level BPE (jax3dc.processing.bpe) from datasets' texts."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ example:  jax3dc data tokenizer --data data/train --vocab-size 4096 --out tokeni
 
 def record_texts(records: Iterable, split: str) -> Iterator[str]:
     """Chat segments of every record in ``split`` ("all": every record)."""
-    from jax3dc.model.bpe import chat_segments
+    from jax3dc.processing.bpe import chat_segments
     from jax3dc.prompt import chat_messages, code_messages
 
     for record in records:
@@ -59,7 +59,7 @@ def run_tokenizer_command(args: argparse.Namespace) -> int:
 
     from data_pipeline.shards import load_manifest, read_dataset
     from jax3dc.errors import InputFileError
-    from jax3dc.model.bpe import QWEN_ADDED_TOKENS, train_bpe
+    from jax3dc.processing.bpe import QWEN_ADDED_TOKENS, train_bpe
 
     if args.vocab_size < 256 + len(QWEN_ADDED_TOKENS) or args.min_frequency < 1 or args.digits < 1:
         raise SystemExit(f"--vocab-size must be >= {256 + len(QWEN_ADDED_TOKENS)}, --min-frequency and "

@@ -4,7 +4,7 @@ part programs from image I alone) for it in batches.
 Records are tokenised once up front (ids only; pixels are made per batch, so a large split does
 not sit in memory as patches), sorted longest first so a batch that does not fit shows up at the
 start, left-padded to a multiple of ``bucket`` (few distinct shapes, few recompiles) and run
-through a jitted prefill + the jitted decode loop of ``jax3dc.model.generate``. The prefill passes
+through a jitted prefill + the jitted decode loop of ``jax3dc.generate``. The prefill passes
 ``vision_window`` = the largest image's patch count so each image attends only to itself (full
 packed attention over a whole batch of images runs out of memory).
 
@@ -40,12 +40,12 @@ from data_pipeline.record import CorruptRecordError, Record
 from data_pipeline.shards import read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
-from jax3dc.model.chat import encode_chat
+from jax3dc.processing.chat import encode_chat
 from jax3dc.constrained import program_constraint, structure_constraint
-from jax3dc.model.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
+from jax3dc.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
 from jax3dc.model.params import load_pretrained
-from jax3dc.model.processor import ImageProcessorConfig, preprocess_images, smart_resize
-from jax3dc.model.tokenizer import load_tokenizer
+from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images, smart_resize
+from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.prompt import chat_messages, code_messages
 from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
 

@@ -10,12 +10,12 @@ from pathlib import Path
 def write_tiny_checkpoint(path: Path) -> Path:
     from flax import nnx
 
-    from jax3dc.model.chat import VL_CHAT_TEMPLATE
+    from jax3dc.processing.chat import VL_CHAT_TEMPLATE
     from jax3dc.model.config import Qwen3VLConfig
     from jax3dc.model.params import save_pretrained
-    from jax3dc.model.processor import ImageProcessorConfig
+    from jax3dc.processing.processor import ImageProcessorConfig
     from jax3dc.model.qwen3_vl import Qwen3VL
-    from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS, load_tokenizer
+    from jax3dc.processing.tokenizer import QWEN_VL_SPECIAL_IDS, load_tokenizer
 
     config = dataclasses.replace(
         Qwen3VLConfig.tiny(vocab_size=151936, tie_word_embeddings=True),

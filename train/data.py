@@ -15,8 +15,8 @@ from typing import Iterator
 import jax
 
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.processor import ImageProcessorConfig
-from jax3dc.model.tokenizer import Tokenizer, load_tokenizer
+from jax3dc.processing.processor import ImageProcessorConfig
+from jax3dc.processing.tokenizer import Tokenizer, load_tokenizer
 from train.batch import ImageLayout, SyntheticBatches
 from train.config import ConfigError, TrainConfig, require_data
 

@@ -18,7 +18,7 @@ import numpy as np
 from flax import nnx
 from jax.sharding import Mesh
 
-from jax3dc.model.bpe import config_for_tokenizer
+from jax3dc.processing.bpe import config_for_tokenizer
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.random_weights import build_random
@@ -118,7 +118,7 @@ def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None)
     With several processes every process must call this (each tensor is gathered from all of
     them, one at a time); only process 0 writes."""
     from jax3dc.model import params as hf_params
-    from jax3dc.model.chat import VL_CHAT_TEMPLATE
+    from jax3dc.processing.chat import VL_CHAT_TEMPLATE
 
     model = state.merged()
     hf_params.save_pretrained(model, model.config, directory)

@@ -35,9 +35,9 @@ def generate_texts(generator: "Generator", images: Sequence[Image.Image], messag
     import jax
 
     from jax3dc.constrained import program_constraint, structure_constraint
-    from jax3dc.model.chat import encode_chat
-    from jax3dc.model.generate import GenerationConfig, decode, prefill, repeat_rows  # jax: imported only to generate
-    from jax3dc.model.processor import preprocess_images
+    from jax3dc.processing.chat import encode_chat
+    from jax3dc.generate import GenerationConfig, decode, prefill, repeat_rows  # jax: imported only to generate
+    from jax3dc.processing.processor import preprocess_images
 
     processed = preprocess_images(list(images), generator.processor)
     chat = encode_chat(generator.tokenizer, messages, processed.image_grid_thw,

@@ -40,7 +40,7 @@ from eval.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_m
                                  stage1_from_program)
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
-from jax3dc.model.processor import load_image, to_rgb
+from jax3dc.processing.processor import load_image, to_rgb
 from jax3dc.palette import object_palette
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json

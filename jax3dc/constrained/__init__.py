@@ -4,7 +4,7 @@
 their part ids and joint counts set each row's registers; the tables are built once per tokenizer.
 ``program_constraint`` gives the part-program grammar (SPEC §6) for a batch of stage-1 code
 prompts (the same for every row: a program depends on no prompt text).
-Pass either to ``jax3dc.model.generate.decode(..., constraint=...)``.
+Pass either to ``jax3dc.generate.decode(..., constraint=...)``.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def prompt_counts(prompt: str, where: str = "prompt") -> tuple[int, int]:
 def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], names: Sequence[str] | None = None):
     """The structure grammar for these prompts (one row each), as a ``generate.Constraint``;
     ``names`` (e.g. record keys) say which prompt an error is about."""
-    from jax3dc.model.generate import Constraint
+    from jax3dc.generate import Constraint
 
     names = list(names) if names is not None else [f"prompt {i}" for i in range(len(prompts))]
     counts = [prompt_counts(p, name) for p, name in zip(prompts, names)]
@@ -47,7 +47,7 @@ def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], nam
 def program_constraint(tokenizer, vocab_size: int, rows: int):
     """The part-program grammar for ``rows`` rows, as a ``generate.Constraint``."""
     from jax3dc.constrained import program
-    from jax3dc.model.generate import Constraint
+    from jax3dc.generate import Constraint
 
     return Constraint(program.program_tables(tokenizer, vocab_size), program.initial_rows(rows))
 

@@ -15,9 +15,9 @@ from flax import nnx
 from jax3dc.constrained import program_constraint
 from jax3dc.constrained.program import advance, allowed, initial_rows, program_tables
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.generate import GenerationConfig, generate
+from jax3dc.generate import GenerationConfig, generate
 from jax3dc.model.qwen3_vl import Qwen3VL
-from jax3dc.model.tokenizer import load_tokenizer
+from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.program.interpreter import parse_program
 from jax3dc.release import MODEL_DIR
 

@@ -231,13 +231,13 @@ def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoi
 @pytest.mark.slow
 def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path, checkpoint: Path) -> None:
     """Batch rows (left padding, vision_window, the topped-up row) decode as each prompt alone
-    through jax3dc.model.generate.generate with full vision attention."""
+    through jax3dc.generate.generate with full vision attention."""
     import jax
 
     from data_pipeline.shards import shard_paths
     from eval.generation import DecodeOptions, Generator, read_records
-    from jax3dc.model.generate import GenerationConfig, generate
-    from jax3dc.model.processor import preprocess_images
+    from jax3dc.generate import GenerationConfig, generate
+    from jax3dc.processing.processor import preprocess_images
 
     generator = Generator.load(checkpoint, dtype="float32")
     records = list(read_records(shard_paths([shards], "test"), "test"))
@@ -261,7 +261,7 @@ def test_weights_only_export_falls_back_to_packaged_tokenizer(checkpoint: Path, 
     import shutil
 
     from eval.generation import Generator
-    from jax3dc.model.processor import ImageProcessorConfig
+    from jax3dc.processing.processor import ImageProcessorConfig
 
     for path in checkpoint.iterdir():
         if path.name == "config.json" or path.suffix == ".safetensors" or path.name.endswith(".index.json"):

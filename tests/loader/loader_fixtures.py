@@ -11,10 +11,10 @@ from PIL import Image
 from data_pipeline.factories import generate_object
 from data_pipeline.record import Record, encode_record
 from jax3dc.geometry.parts import part_boxes
-from jax3dc.model.bpe import config_for_tokenizer
+from jax3dc.processing.bpe import config_for_tokenizer
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.processor import ImageProcessorConfig
-from jax3dc.model.tokenizer import load_tokenizer
+from jax3dc.processing.processor import ImageProcessorConfig
+from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt
 from jax3dc.structure import to_json

@@ -10,10 +10,10 @@ from flax import nnx
 
 from data_pipeline.examples import ExampleEncoder
 from data_pipeline.packing import RowLayout, pack_row, rope_positions
-from jax3dc.model.chat import IGNORE_INDEX
+from jax3dc.processing.chat import IGNORE_INDEX
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.rope import get_rope_index
-from jax3dc.model.tokenizer import load_tokenizer
+from jax3dc.processing.tokenizer import load_tokenizer
 from tests.loader.loader_fixtures import CATEGORIES, record, tiny_config, tiny_processor
 
 

@@ -13,7 +13,7 @@ from PIL import Image
 from data_pipeline.loader import LoaderConfig, LoaderError, ShardLoader, _source
 from data_pipeline.record import decode_record, encode_record
 from data_pipeline.shards import shard_paths
-from jax3dc.model.tokenizer import load_tokenizer
+from jax3dc.processing.tokenizer import load_tokenizer
 from tests.loader.loader_fixtures import CATEGORIES, IMAGE, record, tiny_config, tiny_processor, write_dataset, write_shard
 
 ROWS, SEQ = 2, 2400

@@ -21,10 +21,10 @@ from data_pipeline.shards import write_dataset
 from jax3dc.cli import main as cli_main
 from jax3dc.errors import InputFileError
 from jax3dc.geometry.parts import part_boxes
-from jax3dc.model.bpe import QWEN_ADDED_TOKENS, chat_segments, config_for_tokenizer, train_bpe
-from jax3dc.model.chat import IGNORE_INDEX, VL_CHAT_TEMPLATE, encode_chat
+from jax3dc.processing.bpe import QWEN_ADDED_TOKENS, chat_segments, config_for_tokenizer, train_bpe
+from jax3dc.processing.chat import IGNORE_INDEX, VL_CHAT_TEMPLATE, encode_chat
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.tokenizer import load_tokenizer
+from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt, chat_messages, code_messages
 from jax3dc.structure import to_json
@@ -131,7 +131,7 @@ def test_training_is_deterministic(bpe, corpus, tmp_path) -> None:
     assert train_bpe(corpus, VOCAB)._backend.to_str() == bpe._backend.to_str()
     # A fresh process gets fresh hash seeds (Rust and Python): the same file must come out.
     (tmp_path / "corpus.json").write_text(json.dumps(corpus))
-    script = ("import json, sys; from jax3dc.model.bpe import train_bpe; "
+    script = ("import json, sys; from jax3dc.processing.bpe import train_bpe; "
               f"t = train_bpe(json.load(open(sys.argv[1])), {VOCAB}); print(t._backend.to_str())")
     root = Path(__file__).resolve().parents[2]
     out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "corpus.json")], cwd=root, check=True,

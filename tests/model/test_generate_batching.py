@@ -9,7 +9,7 @@ import pytest
 from flax import nnx
 
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.generate import GenerationConfig, generate, left_pad, sample_token, split_rows
+from jax3dc.generate import GenerationConfig, generate, left_pad, sample_token, split_rows
 from jax3dc.model.qwen3_vl import Qwen3VL
 
 NEW = 12
@@ -143,7 +143,7 @@ def test_generation_config_rejects_nonsense() -> None:
 
 
 def test_decode_refuses_a_cache_too_small(tiny) -> None:
-    from jax3dc.model.generate import CACHE_MULTIPLE, decode, prefill
+    from jax3dc.generate import CACHE_MULTIPLE, decode, prefill
 
     model, config = tiny
     state = prefill(model, np.array([[1, 2, 3]]), max_new_tokens=4)

@@ -17,9 +17,9 @@ import jax  # noqa: E402
 from PIL import Image  # noqa: E402
 
 from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
-from jax3dc.model.generate import GenerationConfig, generate  # noqa: E402
+from jax3dc.generate import GenerationConfig, generate  # noqa: E402
 from jax3dc.model.params import load_pretrained  # noqa: E402
-from jax3dc.model.processor import ImageProcessorConfig, preprocess_image  # noqa: E402
+from jax3dc.processing.processor import ImageProcessorConfig, preprocess_image  # noqa: E402
 
 NEW_TOKENS = 32
 

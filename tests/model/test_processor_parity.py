@@ -13,7 +13,7 @@ from transformers.models.qwen2_vl.image_processing_pil_qwen2_vl import Qwen2VLIm
 from transformers.models.qwen2_vl.image_processing_pil_qwen2_vl import smart_resize as hf_smart_resize
 
 from jax3dc.errors import InputFileError
-from jax3dc.model.processor import (
+from jax3dc.processing.processor import (
     ImageProcessorConfig,
     load_image,
     preprocess_image,
@@ -181,7 +181,7 @@ def test_load_image_refuses_too_many_pixels_before_decoding(tmp_path):
     from PIL import Image as PILImage
 
     from jax3dc.errors import InputFileError
-    from jax3dc.model.processor import load_image
+    from jax3dc.processing.processor import load_image
 
     path = tmp_path / "wide.png"
     PILImage.new("L", (3000, 2000)).save(path)

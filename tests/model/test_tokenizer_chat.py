@@ -8,9 +8,9 @@ from PIL import Image
 from transformers import AutoTokenizer, Qwen3VLProcessor
 from transformers.models.qwen2_vl.image_processing_pil_qwen2_vl import Qwen2VLImageProcessorPil
 
-from jax3dc.model.chat import IGNORE_INDEX, VL_CHAT_TEMPLATE, encode_chat, render_chat
-from jax3dc.model.processor import ImageProcessorConfig, preprocess_images
-from jax3dc.model.tokenizer import default_tokenizer_dir, load_tokenizer
+from jax3dc.processing.chat import IGNORE_INDEX, VL_CHAT_TEMPLATE, encode_chat, render_chat
+from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images
+from jax3dc.processing.tokenizer import default_tokenizer_dir, load_tokenizer
 
 
 class ImageOnlyQwen3VLProcessor(Qwen3VLProcessor):

@@ -9,7 +9,7 @@ import pytest
 from transformers import AutoTokenizer
 
 from jax3dc.errors import InputFileError
-from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS, default_tokenizer_dir, load_tokenizer
+from jax3dc.processing.tokenizer import QWEN_VL_SPECIAL_IDS, default_tokenizer_dir, load_tokenizer
 
 SAMPLES = [
     "Parts (id: colour | centroid | extent):\n1: #3a7bd5 | 0.000 0.012 -0.100 | 1.000 0.600 0.800",
@@ -81,7 +81,7 @@ def test_wrong_special_id_is_rejected(tmp_path) -> None:
 
 
 def test_saved_tokenizer_carries_the_vl_template(tmp_path, tokenizer) -> None:
-    from jax3dc.model.chat import VL_CHAT_TEMPLATE, render_chat
+    from jax3dc.processing.chat import VL_CHAT_TEMPLATE, render_chat
 
     tokenizer.save_pretrained(tmp_path, chat_template=VL_CHAT_TEMPLATE)
     reloaded = load_tokenizer(tmp_path)

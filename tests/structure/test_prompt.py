@@ -90,7 +90,7 @@ QWEN_VL_STYLE = (
 def test_messages_render_through_a_hugging_face_chat_template():
     from transformers import AutoTokenizer
 
-    from jax3dc.model.tokenizer import default_tokenizer_dir
+    from jax3dc.processing.tokenizer import default_tokenizer_dir
 
     folder = default_tokenizer_dir()
 

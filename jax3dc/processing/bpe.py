@@ -28,9 +28,9 @@ from typing import Iterable, Mapping, Sequence
 import tokenizers
 from tokenizers import AddedToken, Regex, decoders, models, pre_tokenizers, processors, trainers
 
-from jax3dc.model.chat import render_chat
+from jax3dc.processing.chat import render_chat
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.tokenizer import Tokenizer
+from jax3dc.processing.tokenizer import Tokenizer
 
 #: Qwen3's added tokens in id order, with their ``special`` flag (as in Qwen3's tokenizer.json).
 QWEN_ADDED_TOKENS: tuple[tuple[str, bool], ...] = (

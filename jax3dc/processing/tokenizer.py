@@ -56,7 +56,7 @@ class SpecialTokens:
 
 def expected_special_id(token: str, learned_vocab: int) -> int:
     """Qwen3's layout: the added tokens follow the learned vocabulary in a fixed order, so a
-    smaller BPE with the same added tokens (jax3dc.model.bpe) has each at learned_vocab + offset;
+    smaller BPE with the same added tokens (jax3dc.processing.bpe) has each at learned_vocab + offset;
     for Qwen3 itself (151,643 learned ids) that is exactly QWEN_VL_SPECIAL_IDS."""
     return learned_vocab + QWEN_VL_SPECIAL_IDS[token] - QWEN_LEARNED_VOCAB
 

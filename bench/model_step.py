@@ -4,7 +4,7 @@ mean token NLL w.r.t. the decoder (the vision tower is frozen: forward only), no
 update. Prints tokens/s and TFLOP/s by hf_peer's FLOP formula, e.g. to choose the attention
 kernel and remat. (Decoding is measured by bench/decode.py.)
 
-    python3 -m jax3dc.model.bench --preset qwen3_vl_4b --batch 4 --length 2048 --impl cudnn --remat
+    python3 -m bench.model_step --preset qwen3_vl_4b --batch 4 --length 2048 --impl cudnn --remat
 """
 
 from __future__ import annotations

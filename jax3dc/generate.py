@@ -32,7 +32,7 @@ from flax import nnx
 
 from jax3dc.constrained import program, structure
 from jax3dc.model.qwen3_vl import KVCache
-from jax3dc.model.tokenizer import QWEN_VL_SPECIAL_IDS
+from jax3dc.processing.tokenizer import QWEN_VL_SPECIAL_IDS
 
 
 @dataclass(frozen=True)

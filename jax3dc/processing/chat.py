@@ -16,8 +16,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from jax3dc.model.processor import image_token_counts
-from jax3dc.model.tokenizer import Tokenizer
+from jax3dc.processing.processor import image_token_counts
+from jax3dc.processing.tokenizer import Tokenizer
 
 IGNORE_INDEX = -100
 
