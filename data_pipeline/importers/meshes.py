@@ -2,6 +2,12 @@
 
 Only geometry matters for parts, so OBJ material libraries are skipped: real datasets ship
 ``.mtl`` files that name texture images which are not there.
+
+Real datasets also ship mesh files that cannot be a piece of a part: missing, empty, unreadable,
+or ones MuJoCo refuses (fewer than 4 vertices, all on one line; flat, where a colliding geom needs
+a convex hull). Those raise :class:`UnusableMesh`, which the readers turn into a dropped piece and
+a warning naming the file; what points at hostile input (faces over the cap, coordinates that are
+not finite) stays an InputFileError that refuses the object.
 """
 
 from __future__ import annotations
@@ -15,46 +21,80 @@ from data_pipeline.importers.limits import FaceBudget
 from jax3dc.errors import InputFileError, shorten
 from jax3dc.geometry.mesh_size import MAX_COORDINATE, declared_faces
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".glb", ".gltf", ".off")
+FLAT_TOLERANCE = 1e-9
+"""Thickness, relative to a mesh's largest spread, below which its vertices count as coplanar
+(or collinear): far below any real part, far above float round-off of a flat OBJ (~1e-13)."""
 
 
-def load_mesh_file(path: Path, referenced_by: Path, where: str, budget: FaceBudget,
-                   warnings: list[str]) -> trimesh.Trimesh | None:
-    """Triangle mesh of ``path``; errors name the referencing file and element (``where``).
+class UnusableMesh(Exception):
+    """A mesh file that cannot be a piece of a part; the message names the file and the reason.
 
-    A file without triangles (zero bytes, or vertices only) gives None and a warning naming it:
-    the piece is dropped, and the user is told which file. Faces are counted against ``budget``
-    before the file is parsed, and again once it is (quads and n-gons make more triangles).
+    Not an InputFileError: readers catch it and drop the one piece, since refusing a whole real
+    object for one bad piece among good ones loses the object.
     """
+
+
+def check_mesh_file(path: Path) -> None:
+    """UnusableMesh when ``path`` is not a file or is empty: the checks that need no parsing."""
     if not path.is_file():
-        raise InputFileError(referenced_by, f"{where}: mesh file {path} not found")
-    if path.suffix.lower() not in MESH_SUFFIXES:
-        raise InputFileError(referenced_by, f"{where}: unsupported mesh format {path.suffix!r} ({path})")
+        raise UnusableMesh(f"mesh file {path} not found")
     try:
         empty = path.stat().st_size == 0
-        declared = None if empty else declared_faces(path)
     except OSError as e:
-        raise InputFileError(referenced_by, f"{where}: cannot read mesh {path}: {e.strerror or e}") from None
+        raise UnusableMesh(f"cannot read mesh file {path}: {e.strerror or e}") from None
     if empty:
-        warnings.append(f"{where}: mesh file {path} is empty (0 bytes); that piece is skipped")
-        return None
+        raise UnusableMesh(f"mesh file {path} is empty (0 bytes)")
+
+
+def load_mesh_file(path: Path, referenced_by: Path, where: str, budget: FaceBudget) -> trimesh.Trimesh:
+    """Triangle mesh of ``path``; errors name the referencing file and element (``where``).
+
+    A file that is missing, of a format not read here, unreadable or without triangles raises
+    UnusableMesh. Faces are counted against ``budget`` before the file is parsed, and again once
+    it is (quads and n-gons make more triangles).
+    """
+    check_mesh_file(path)
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise UnusableMesh(f"mesh file {path} has an unsupported format {path.suffix!r}")
+    try:
+        declared = declared_faces(path)
+    except OSError as e:
+        raise UnusableMesh(f"cannot read mesh file {path}: {e.strerror or e}") from None
     if declared is not None:
         budget.check(declared, f"mesh {path}", referenced_by, where)
     try:
         kwargs = {"skip_materials": True} if path.suffix.lower() == ".obj" else {}
         loaded = trimesh.load(str(path), force="mesh", process=False, **kwargs)
     except Exception as e:  # trimesh raises many types for corrupt files
-        raise InputFileError(referenced_by, f"{where}: cannot read mesh {shorten(str(path), 200)}: "
-                                            f"{shorten(str(e), 200)}") from None
+        raise UnusableMesh(f"cannot read mesh file {shorten(str(path), 200)}: {shorten(str(e), 200)}") from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
-        # force="mesh" gives an empty Scene-derived object for files without faces
-        warnings.append(f"{where}: mesh file {path} has no triangles; that piece is skipped")
-        return None
+        # force="mesh" gives an empty Scene-derived object for files without faces (or garbage bytes)
+        raise UnusableMesh(f"mesh file {path} has no readable triangles")
     budget.admit(len(loaded.faces), f"mesh {path}", referenced_by, where)
     vertices = np.asarray(loaded.vertices, float)
     if not np.isfinite(vertices).all() or np.abs(vertices).max() > MAX_COORDINATE:
         raise InputFileError(referenced_by, f"{where}: mesh {path} has vertices that are not finite or beyond "
                                             f"+-{MAX_COORDINATE:g}")
     return trimesh.Trimesh(vertices, np.asarray(loaded.faces), process=False)
+
+
+def refusal(vertices: np.ndarray, colliding: bool) -> str | None:
+    """Why MuJoCo refuses a mesh of these (finite) ``vertices``, or None: fewer than 4 distinct
+    vertices, or all on one line, whatever the geom; all in one plane, only for a ``colliding``
+    geom (MuJoCo needs its convex hull; a visual-only flat mesh, like a door panel, is fine)."""
+    if len(vertices) < 4:
+        return f"has {len(vertices)} vertices; MuJoCo needs at least 4 vertices"
+    spread = np.linalg.svd(vertices - vertices.mean(axis=0), compute_uv=False)
+    if spread[2] > FLAT_TOLERANCE * spread[0]:
+        return None  # a solid, so at least 4 distinct vertices
+    distinct = len(np.unique(vertices, axis=0))
+    if distinct < 4:
+        return f"has {distinct} distinct vertices; MuJoCo needs at least 4 vertices"
+    if spread[1] <= FLAT_TOLERANCE * spread[0]:
+        return "has no area: its vertices all lie on one line"
+    if colliding:
+        return "has zero volume: its vertices all lie in one plane, so a colliding geom has no convex hull"
+    return None
 
 
 def transformed(mesh: trimesh.Trimesh, matrix: np.ndarray) -> trimesh.Trimesh:

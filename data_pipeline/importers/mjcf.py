@@ -9,6 +9,9 @@ images that are not shipped.
 Geometry: in a body with visual-only geoms (contype = conaffinity = 0, the Infinigen-Sim and
 MuJoCo Menagerie convention for render meshes) only those are used, so that collision hulls do
 not double the surface; in other bodies every geom. Planes and height fields (floors) are skipped.
+A mesh file that cannot be a piece (see ``meshes``: missing, empty, unreadable, or one MuJoCo
+refuses) is dropped before compiling, with the geoms that use it and one warning naming it; a body
+whose every geom is dropped is an error naming the body.
 
 Joints: hinge and slide keep their range minus the joint's ``ref`` (the file's pose is the pose
 at ``ref``, so ranges are measured from it); unlimited hinges get [-pi, pi]; unlimited slides,
@@ -31,7 +34,6 @@ from data_pipeline.importers.kinematic_tree import Edge, KinematicTree, Link, Mo
 from data_pipeline.importers.limits import FaceBudget, ImportLimits, inside_folder
 from data_pipeline.importers.urdf import parse_xml
 from jax3dc.errors import InputFileError, shorten
-from jax3dc.geometry.mesh_size import declared_faces
 
 HINGE_LIMIT = 2 * math.pi
 _G = mujoco.mjtGeom
@@ -80,26 +82,53 @@ def _check_hfield(path: Path, element, limits: ImportLimits) -> None:
 
 
 def _mesh_files(path: Path, spec: mujoco.MjSpec, limits: ImportLimits, warnings: list[str]) -> None:
-    """Check each mesh file before MuJoCo loads it: inside the object's folder, faces within the cap;
-    an empty file is dropped with the geoms that use it, and a warning naming it."""
+    """Check each mesh file before MuJoCo loads it: inside the object's folder, faces within the cap.
+    One that cannot be a piece is dropped with the geoms that use it and a warning naming it, so
+    that MuJoCo's refusal of one file does not refuse the object; a body left without geometry is
+    an InputFileError naming it."""
     budget = FaceBudget(limits)
     folder = path.parent
+    bodies = list(spec.bodies)  # in model order: unnamed bodies are named by index as read_mjcf names them
+    dropped: dict[int, list[str]] = {}  # index in ``bodies`` -> reasons
     for mesh in list(spec.meshes):
         if not mesh.file:
             continue
         where = f"<mesh name={mesh.name!r:.60}>"
         file = inside_folder(folder / (spec.meshdir or "") / mesh.file, folder, path, where, limits)
-        if not file.is_file():
-            raise InputFileError(path, f"{where}: mesh file {file} not found")
-        if file.stat().st_size == 0:
-            warnings.append(f"{where}: mesh file {file} is empty (0 bytes); it and the geoms using it are skipped")
-            for geom in [g for g in spec.geoms if g.meshname == mesh.name]:
+        users = [g for g in spec.geoms if g.meshname == mesh.name]
+        try:
+            _check_mesh(file, np.asarray(mesh.scale, float), any(g.contype or g.conaffinity for g in users),
+                        path, where, budget)
+        except meshes.UnusableMesh as e:
+            owners = sorted({bodies.index(g.parent) for g in users})
+            names = ", ".join(repr(_body_name(bodies, b)) for b in owners)
+            warnings.append(f"{where}: {e}; it and the geoms using it are dropped"
+                            + (f" (in {'body' if len(owners) == 1 else 'bodies'} {names})" if owners else ""))
+            for geom in users:
                 spec.delete(geom)
             spec.delete(mesh)
-            continue
-        declared = declared_faces(file)
-        if declared is not None:
-            budget.admit(declared, f"mesh {file}", path, where)
+            for b in owners:
+                dropped.setdefault(b, []).append(str(e))
+    for b, reasons in dropped.items():
+        if all(int(g.type) in SKIPPED_GEOMS for g in bodies[b].geoms):
+            raise InputFileError(path, f"body {_body_name(bodies, b)!r} has no geometry left: every geom was "
+                                       f"dropped ({'; '.join(reasons)})")
+
+
+def _body_name(bodies: list, index: int) -> str:
+    return bodies[index].name or f"body_{index}"
+
+
+def _check_mesh(file: Path, scale: np.ndarray, colliding: bool, path: Path, where: str, budget: FaceBudget) -> None:
+    """meshes.UnusableMesh when MuJoCo would refuse ``file`` (scaled as the <mesh> says) or cannot
+    read it; formats trimesh does not read (MuJoCo's .msh) are left to MuJoCo after the file checks."""
+    meshes.check_mesh_file(file)
+    if file.suffix.lower() not in meshes.MESH_SUFFIXES:
+        return  # the model's total faces are still capped once it is compiled
+    loaded = meshes.load_mesh_file(file, path, where, budget)
+    reason = meshes.refusal(np.asarray(loaded.vertices) * scale, colliding)
+    if reason is not None:
+        raise meshes.UnusableMesh(f"mesh file {file} {reason}")
 
 
 def _compile(path: Path, limits: ImportLimits,

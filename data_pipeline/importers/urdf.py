@@ -10,6 +10,12 @@ into the Z-up object frame.
 Joint types: revolute and continuous become hinges (continuous: range [-pi, pi], one full turn
 either way from the rest pose), prismatic becomes a slide, fixed is a rigid attachment, and
 floating / planar (which a structure cannot express) are imported as rigid with a warning.
+
+A mesh file that cannot be a piece (see ``meshes``) is dropped with one warning naming it and the
+reason; a link whose every piece is dropped is an error naming the link, since importing the object
+without that part would silently change its structure. A flat piece is kept: a link's pieces are
+merged into one part mesh before any simulator sees them, and PartNet-Mobility models whole parts
+(door_8877's door) as one flat mesh.
 """
 
 from __future__ import annotations
@@ -108,10 +114,9 @@ def _mesh_path(urdf: Path, filename: str) -> Path:
     return urdf.parent / filename
 
 
-def _geometry(urdf: Path, element: ET.Element, where: str, limits: ImportLimits, budget: FaceBudget,
-              warnings: list[str]):
-    """Mesh of one <visual>/<collision>, in the frame of its link; None for a mesh file without
-    triangles (skipped, with a warning naming it)."""
+def _geometry(urdf: Path, element: ET.Element, where: str, limits: ImportLimits, budget: FaceBudget):
+    """Mesh of one <visual>/<collision>, in the frame of its link; meshes.UnusableMesh for a mesh
+    file that cannot be a piece."""
     geometry = element.find("geometry")
     shape = None if geometry is None else next(iter(geometry), None)
     if shape is None:
@@ -121,11 +126,12 @@ def _geometry(urdf: Path, element: ET.Element, where: str, limits: ImportLimits,
         if not filename:
             raise InputFileError(urdf, f"{where} <mesh>: no filename")
         mesh_path = inside_folder(_mesh_path(urdf, filename), urdf.parent, urdf, f"{where} <mesh>", limits)
-        mesh = meshes.load_mesh_file(mesh_path, urdf, where, budget, warnings)
-        if mesh is None:
-            return None
+        mesh = meshes.load_mesh_file(mesh_path, urdf, where, budget)
         factors = _numbers(urdf, f"{where} <mesh scale>", shape.get("scale"), 3, (1.0, 1.0, 1.0))
-        mesh.apply_transform(scaling(factors))
+        mesh.apply_transform(scaling(factors))  # before the check: a zero scale factor flattens the mesh
+        reason = meshes.refusal(np.asarray(mesh.vertices), colliding=False)
+        if reason is not None:
+            raise meshes.UnusableMesh(f"mesh file {mesh_path} {reason}")
         return mesh
     if shape.tag == "box":
         primitive = meshes.box(_numbers(urdf, f"{where} <box size>", shape.get("size"), 3, None))
@@ -235,17 +241,23 @@ def read_urdf(path: Path, progress: bool = False, limits: ImportLimits = ImportL
     bar = tqdm(total=sum(map(len, shapes.values())), desc="meshes", unit="mesh", disable=not progress)
     links: dict[str, Link] = {}
     for name, element in link_elements.items():
-        pieces, shape_names, material_names = [], [], []
+        pieces, shape_names, material_names, dropped = [], [], [], []
         for index, shape in enumerate(shapes[name]):
             where = f"link {name!r} <{shape.tag}> #{index + 1}"
-            local = _geometry(path, shape, where, limits, budget, warnings)
             bar.update()
-            if local is None:
+            try:
+                local = _geometry(path, shape, where, limits, budget)
+            except meshes.UnusableMesh as e:
+                warnings.append(f"{where}: {e}; that piece is dropped")
+                dropped.append(str(e))
                 continue
             pieces.append(meshes.transformed(local, world[name] @ _origin(path, shape, where)))
             shape_names.append(_label(shape.get("name")))
             material = shape.find("material")
             material_names.append("" if material is None else material.get("name") or "")
+        if dropped and not pieces:
+            raise InputFileError(path, f"link {name!r} has no geometry left: every piece was dropped "
+                                       f"({'; '.join(dropped)})")
         label = semantics[name][1] if name in semantics else None
         links[name] = Link(name, meshes.merged(pieces), label, tuple(n for n in shape_names if n),
                            tuple(dict.fromkeys(n for n in material_names if n)))

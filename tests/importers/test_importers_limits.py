@@ -59,7 +59,8 @@ def test_mjcf_empty_mesh_is_skipped_and_named(layout):
 
 
 def test_face_cap_counts_before_loading(layout):
-    (layout / "many.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n" + "f 1 2 3\n" * 5000)
+    # faces on 4 vertices, not 3: a mesh of 3 would be dropped as one MuJoCo refuses
+    (layout / "many.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n" + "f 1 2 3\nf 1 2 4\n" * 2500)
     path = _urdf(layout, "many.obj")
     with pytest.raises(InputFileError, match="5000 faces; the cap is 4000 \\(raise it with --max-faces\\)"):
         import_object(path, limits=ImportLimits(max_faces=4000))
