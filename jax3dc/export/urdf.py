@@ -5,7 +5,9 @@ Each link's frame is at its joint pivot (rigid parts share their parent's frame;
 and its axis is the structure's axis. Inertials come from the part's solid (closed mesh, else
 convex hull, else a thin box) × the family density. Meshes are written beside the URDF in
 ``meshes/<id>.obj``, already in the link frame and in metres; a flat part collides as a box.
-A scene with several roots gets a ``scene_root`` base link holding each root by a fixed joint.
+A scene with several roots gets a ``scene_root`` base link holding each root by a fixed joint. It
+has an explicit zero-mass inertial, since PyBullet gives a link without one 1 kg where MuJoCo
+gives 0; a massless base is then fixed in PyBullet, as the MJCF fixes its roots to the world.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import trimesh
 
 from jax3dc.export.assembly import ExportPart, assemble, unit_axis, vec
@@ -43,7 +46,7 @@ def urdf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
     labels = {part.part_id: part.label for part in export}
     roots = [part for part in export if part.parent is None]
     if len(roots) > 1:
-        ET.SubElement(robot, "link", name=SCENE_ROOT)
+        _add_inertial(ET.SubElement(robot, "link", name=SCENE_ROOT), np.zeros(3), 0.0, np.zeros((3, 3)))
     files: dict[str, bytes] = {}
     for part in export:
         file_name = f"{MESH_DIR}/{part.part_id}.obj"
@@ -62,12 +65,7 @@ def urdf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
 
 def _add_link(robot: ET.Element, part: ExportPart, mesh_file: str) -> None:
     link = ET.SubElement(robot, "link", name=part.label)
-    inertial = ET.SubElement(link, "inertial")
-    ET.SubElement(inertial, "origin", xyz=vec(part.mass.center_of_mass), rpy="0 0 0")
-    ET.SubElement(inertial, "mass", value=vec([part.mass.mass]))
-    i = part.mass.inertia
-    ET.SubElement(inertial, "inertia", ixx=vec([i[0, 0]]), ixy=vec([i[0, 1]]), ixz=vec([i[0, 2]]),
-                  iyy=vec([i[1, 1]]), iyz=vec([i[1, 2]]), izz=vec([i[2, 2]]))
+    _add_inertial(link, part.mass.center_of_mass, part.mass.mass, part.mass.inertia)
     visual = ET.SubElement(link, "visual")
     ET.SubElement(visual, "origin", xyz="0 0 0", rpy="0 0 0")
     ET.SubElement(ET.SubElement(visual, "geometry"), "mesh", filename=mesh_file)
@@ -80,6 +78,16 @@ def _add_link(robot: ET.Element, part: ExportPart, mesh_file: str) -> None:
     else:
         ET.SubElement(collision, "origin", xyz="0 0 0", rpy="0 0 0")
         ET.SubElement(ET.SubElement(collision, "geometry"), "mesh", filename=mesh_file)
+
+
+def _add_inertial(link: ET.Element, center_of_mass: np.ndarray, mass: float, inertia: np.ndarray) -> None:
+    """The full tensor about the centre of mass, in the link's axes (the loaders all read the products)."""
+    inertial = ET.SubElement(link, "inertial")
+    ET.SubElement(inertial, "origin", xyz=vec(center_of_mass), rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=vec([mass]))
+    i = inertia
+    ET.SubElement(inertial, "inertia", ixx=vec([i[0, 0]]), ixy=vec([i[0, 1]]), ixz=vec([i[0, 2]]),
+                  iyy=vec([i[1, 1]]), iyz=vec([i[1, 2]]), izz=vec([i[2, 2]]))
 
 
 def _add_joint(robot: ET.Element, part: ExportPart, parent_label: str) -> None:
