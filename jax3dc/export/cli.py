@@ -1,4 +1,4 @@
-"""`jax3dc export`: a structure JSON plus its part meshes -> URDF, MJCF, glTF or a Blender script."""
+"""`jax3dc export`: a structure JSON plus its part meshes -> URDF, MJCF, glTF, USD or a Blender script."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 from jax3dc.errors import InputFileError
 from jax3dc.export.files import check_file_stem
 
-FORMATS = ("urdf", "mjcf", "gltf", "blender")
+FORMATS = ("urdf", "mjcf", "gltf", "usd", "blender")
 
 
 def _exporter(fmt: str):
@@ -23,6 +23,9 @@ def _exporter(fmt: str):
     if fmt == "gltf":
         from jax3dc.export.gltf import export_gltf
         return export_gltf
+    if fmt == "usd":
+        from jax3dc.export.usd import export_usd
+        return export_usd
     from jax3dc.export.blender import export_blender
     return export_blender
 
@@ -72,7 +75,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
-        "export", help="export a structure and its part meshes to URDF, MJCF, glTF or Blender",
+        "export", help="export a structure and its part meshes to URDF, MJCF, glTF, USD or Blender",
         description="Turn a structure (SPEC §2 JSON) and one mesh per part into a simulation or content "
                     "asset, in metres. The parts folder holds <id>.obj (or .stl, .ply, .glb) per part in the "
                     "normalised frame, as written by `jax3dc program run --out` or the dataset tools. "
@@ -84,7 +87,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         help="metres per normalised unit (default: 'scale' of meta.json beside FILE.json, else 1)")
     parser.add_argument("--format", required=True, choices=FORMATS,
                         help="urdf (+ meshes/), mjcf (MuJoCo XML + meshes/), gltf (one .glb), "
-                             "blender (a Python script to run in Blender)")
+                             "usd (one .usda with UsdPhysics), blender (a Python script to run in Blender)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
     parser.add_argument("--name", help="model and main file name (default: the stem of FILE.json)")
     parser.set_defaults(func=_run)
