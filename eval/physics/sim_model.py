@@ -25,7 +25,8 @@ import trimesh
 from scipy.spatial import ConvexHull
 
 from eval.physics.collision_shapes import convex_pieces
-from jax3dc.export.assembly import ExportPart, assemble, unit_axis, vec
+from jax3dc.errors import Jax3dcError
+from jax3dc.export.assembly import ExportPart, assemble, check_nesting, unit_axis, vec
 from jax3dc.geometry.parts import obj_text
 from jax3dc.structure.schema import Structure
 
@@ -79,6 +80,7 @@ def build_sim_model(structure: Structure, parts: dict[int, trimesh.Trimesh], sca
     """Compile the simulation model. ``pieces`` (from an earlier build) skips the decomposition."""
     if options.contact_pairs is not None and not options.frictionless:
         raise ValueError("SimOptions.contact_pairs are frictionless pairs: set frictionless=True as well")
+    check_nesting(structure)
     export = assemble(structure, parts, scale)
     if pieces is None:
         pieces = {p.part_id: convex_pieces(p.mesh, MIN_PIECE_M, scale) for p in export}
@@ -92,7 +94,11 @@ def build_sim_model(structure: Structure, parts: dict[int, trimesh.Trimesh], sca
 
 def _compile(export: list[ExportPart], pieces, scale: float, options: SimOptions, gains=None):
     xml, assets = _mjcf(export, pieces, scale, options, gains)
-    model = mujoco.MjModel.from_xml_string(xml, assets)
+    try:
+        model = mujoco.MjModel.from_xml_string(xml, assets)
+    except ValueError as error:  # MuJoCo's compiler errors, "Caught an unknown exception!" among them
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise Jax3dcError(f"MuJoCo could not compile the simulation model of these parts: {first[:300]}") from None
     part_body = {p.part_id: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, p.label) for p in export}
     return model, part_body, xml, assets
 

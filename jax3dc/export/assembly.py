@@ -54,6 +54,23 @@ def label_of(part_id: int, name: str | None) -> str:
     return f"part_{part_id}_{slug}" if slug else f"part_{part_id}"
 
 
+MAX_NESTED_BODIES = 400
+"""Deepest parent chain that nested-body formats (MJCF, the physics model) take: MuJoCo's XML
+reader stops at about 500 nested elements, and a chain this deep is no household object."""
+
+
+def check_nesting(structure: Structure) -> None:
+    """Refuse, by one clear error, a tree whose parent chain MuJoCo could not read as nested bodies."""
+    depth: dict[int, int] = {}
+    for part_id in tree_order(structure):
+        parent = structure.nodes[part_id].parent
+        depth[part_id] = 1 if parent is None else depth[parent] + 1
+        if depth[part_id] > MAX_NESTED_BODIES:
+            raise StructureError("tree_depth", f"node {part_id}",
+                                 f"the parent chain is more than {MAX_NESTED_BODIES} parts deep; MJCF nests one body "
+                                 f"per part and MuJoCo reads at most about 500 nested elements")
+
+
 def tree_order(structure: Structure) -> list[int]:
     """Parts parent-first: each tree depth-first from its root, roots and children by id."""
     order: list[int] = []

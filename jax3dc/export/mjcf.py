@@ -17,7 +17,7 @@ from pathlib import Path
 
 import trimesh
 
-from jax3dc.export.assembly import ExportPart, assemble, unit_axis, vec
+from jax3dc.export.assembly import ExportPart, assemble, check_nesting, unit_axis, vec
 from jax3dc.export.files import write_files
 from jax3dc.geometry.parts import obj_text
 from jax3dc.materials import MATERIALS
@@ -33,6 +33,7 @@ def mjcf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
     ``free_roots`` gives each root a free joint (an object that can fall or be pushed); by default
     roots are fixed to the world and the model has exactly the structure's joints.
     """
+    check_nesting(structure)
     export = assemble(structure, parts, scale)
     root = ET.Element("mujoco", model=model_name)
     ET.SubElement(root, "compiler", angle="radian", meshdir=MESH_DIR, autolimits="true")

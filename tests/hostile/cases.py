@@ -242,7 +242,7 @@ def _import_files(outside: Path) -> dict[str, tuple[dict[str, bytes | str], str]
                                             '<box size="1 1 1"/></geometry></visual></link><joint name="j" '
                                             'type="fixed"><parent link="a"/><child link="b"/></joint></robot>'},
                              "extent"),
-        "urdf_empty_only": ({"robot.urdf": _urdf("e.obj"), "e.obj": b""}, "no link has any geometry"),
+        "urdf_empty_only": ({"robot.urdf": _urdf("e.obj"), "e.obj": b""}, "no geometry left"),
         "urdf_missing_mesh": ({"robot.urdf": _urdf("gone.obj")}, "not found"),
         "urdf_mesh_is_dir": ({"robot.urdf": _urdf("d.obj"), "d.obj/x": b""}, "not found"),
         "urdf_laughs": ({"robot.urdf": laughs}, "DOCTYPE"),
@@ -286,6 +286,41 @@ def _import_cases(inputs: Path, out: Path) -> list[Case]:
                 path.write_text(content)
         cases.append(Case("data convert", name, ("data", "convert", str(folder), "--out", str(out / name), "--quiet"),
                           expect))
+    return cases
+
+
+def _chain(depth: int) -> str:
+    """A structure whose parent chain is ``depth`` parts long, a hinge on every child."""
+    joint = '"joint":{"type":"hinge","axis":[0,0,1],"pivot":[0,0,0],"range":[0,0.1]}'
+    nodes = ['"1":{"parent":null,"material":0}'] + [f'"{i}":{{"parent":{i - 1},"material":0,{joint}}}'
+                                                   for i in range(2, depth + 1)]
+    return '{"materials":{"0":{"family":"Wood"}},"nodes":{' + ",".join(nodes) + '},"relations":[]}'
+
+
+def _object_cases(inputs: Path, out: Path) -> list[Case]:
+    """A structure with its parts through `export` (every format) and `physics check`."""
+    folder = inputs / "objects_with_parts"
+    deep_parts, far_parts = folder / "deep_parts", folder / "far_parts"
+    deep_parts.mkdir(parents=True)
+    far_parts.mkdir()
+    cube = "v 0 0 0\nv .01 0 0\nv 0 .01 0\nv 0 0 .01\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+    for i in range(1, 1001):
+        (deep_parts / f"{i}.obj").write_text(cube)
+    (far_parts / "1.obj").write_text(_BOX_OBJ)
+    (far_parts / "2.obj").write_text("v 1e308 0 0\nv 0 1e308 0\nv 0 0 1e308\nv -1e308 -1e308 -1e308\n"
+                                     "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    deep, pair = _write(folder / "deep.json", _chain(1000)), _write(folder / "pair.json", _chain(2))
+    inputs_by_name = {"chain_1000": (deep, deep_parts, "more than 400 parts deep"),
+                      "far_vertices": (pair, far_parts, "beyond")}
+    cases = []
+    for name, (structure, parts, expect) in inputs_by_name.items():
+        if name != "chain_1000":  # every format but MJCF nests nothing, and takes a deep chain
+            for fmt in ("urdf", "usd", "gltf", "blender"):
+                cases.append(Case("export", f"{name}_{fmt}", ("export", str(structure), "--parts", str(parts), "--format",
+                                                             fmt, "--out", str(out / f"export_{name}_{fmt}")), expect))
+        cases.append(Case("export", f"{name}_mjcf", ("export", str(structure), "--parts", str(parts), "--format", "mjcf",
+                                                    "--out", str(out / f"export_{name}_mjcf")), expect))
+        cases.append(Case("physics check", name, ("physics", "check", str(structure), "--parts", str(parts)), expect))
     return cases
 
 
@@ -408,4 +443,4 @@ def build_cases(root: Path) -> list[Case]:
     inputs.mkdir(parents=True)
     out.mkdir()
     return (_program_cases(inputs, out) + _structure_cases(inputs, out) + _import_cases(inputs, out)
-            + _metric_cases(inputs, out) + _image_cases(inputs, out))
+            + _metric_cases(inputs, out) + _image_cases(inputs, out) + _object_cases(inputs, out))
