@@ -22,7 +22,7 @@ from the image's camera (--camera), and the structure model (--structure-model) 
 S and the part legend and writes the structure.
 
 Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF),
-object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
+object.usda, object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
 with a slider per joint; open it again with `jax3dc view DIR`) (and program.txt for the code backend,
 structure_raw.txt when the model's JSON is invalid), prompt.txt (the structure model's prompt).
 A bad input stops with one error line; the outputs written before it are kept.

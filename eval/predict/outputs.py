@@ -17,6 +17,7 @@ from jax3dc.export.blender import export_blender
 from jax3dc.export.gltf import export_gltf
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import export_urdf
+from jax3dc.export.usd import export_usd
 from jax3dc.structure.schema import Structure
 from jax3dc.viewer import ViewerInputs, write_viewer
 
@@ -24,10 +25,11 @@ MODEL_NAME = "object"
 
 
 def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path, scale: float) -> dict[str, Path]:
-    """object.urdf, object.xml (MJCF), object.glb and object_blender.py in ``out``, in metres."""
+    """object.urdf, object.xml (MJCF), object.usda, object.glb and object_blender.py in ``out``, in metres."""
     return {
         "urdf": export_urdf(structure, parts, out, scale, model_name=MODEL_NAME),
         "mjcf": export_mjcf(structure, parts, out, scale, model_name=MODEL_NAME),
+        "usd": export_usd(structure, parts, out, scale, model_name=MODEL_NAME),
         "glb": export_gltf(structure, parts, out, scale, model_name=MODEL_NAME),
         "blender": export_blender(structure, parts, out, scale, model_name=MODEL_NAME),
     }

@@ -9,7 +9,7 @@ leaves every output made before it (and the report says what failed):
   3. S rendered from the image's camera -> seg.png;
   4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
      canonical); invalid output -> structure_raw.txt and a StructureError;
-  5. exports -> object.urdf, object.xml, object.glb, object_blender.py (+ meshes/);
+  5. exports -> object.urdf, object.xml, object.usda, object.glb, object_blender.py (+ meshes/);
   6. physics verdict -> physics.json;
   7. report.html / report.png (always, when stage 1 gave parts), and viewer.html (when there is a
      structure; viewer_files/ beside it): the object in 3D with its joints and verdict (jax3dc.viewer).

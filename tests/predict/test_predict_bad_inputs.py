@@ -13,7 +13,7 @@ from jax3dc.errors import InputFileError, ProgramError, StructureError
 from predict_cases import CAMERA, factory_object, target_json, write_glb, write_image
 
 STAGE1_OUTPUTS = ("seg.png", "parts", "report.html", "report.png")
-STAGE2_OUTPUTS = ("structure.json", "object.urdf", "object.xml", "object.glb", "object_blender.py", "physics.json")
+STAGE2_OUTPUTS = ("structure.json", "object.urdf", "object.xml", "object.usda", "object.glb", "object_blender.py", "physics.json")
 
 
 @pytest.fixture(scope="module")

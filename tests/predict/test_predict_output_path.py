@@ -20,7 +20,7 @@ from jax3dc.prompt import CODE_PROMPT, LEGEND_HEADER
 from jax3dc.structure import parse_structure, to_json
 from predict_cases import CAMERA, direct_render, factory_object, target_json, write_glb, write_image
 
-OUTPUTS = ("structure.json", "seg.png", "parts", "object.urdf", "object.xml", "object.glb", "object_blender.py",
+OUTPUTS = ("structure.json", "seg.png", "parts", "object.urdf", "object.xml", "object.usda", "object.glb", "object_blender.py",
            "physics.json", "report.html", "report.png")
 
 
