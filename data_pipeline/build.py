@@ -110,7 +110,7 @@ def load_source(spec: SourceSpec) -> SourceObject:
 
     obj = import_object(Path(spec.path))
     return SourceObject(str(obj.meta.get("category", "imported")), spec.object_id, obj.structure, obj.parts,
-                        float(obj.meta.get("scale", 1.0)))
+                        float(obj.meta.get("scale", 1.0)), warnings=tuple(obj.meta.get("warnings", ())))
 
 
 def load_sources(spec: SourceSpec) -> list[SourceObject]:
@@ -138,6 +138,8 @@ def config_doc(config: BuildConfig) -> dict:
 def spec_records(spec: SourceSpec, split: str, config: BuildConfig):
     """The records of one source: its views and, with ``config.augment``, its split and merge variants."""
     objects = load_sources(spec)
+    for warning in objects[0].warnings:  # printed by the worker that built the object: once per build
+        tqdm.write(f"warning: {spec.object_id}: {warning}", file=sys.stderr)
     for obj in objects:
         yield from object_records(obj, config.views, config.seed, config.size, split=split,
                                   appearance=config.appearance)

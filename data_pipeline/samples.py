@@ -39,7 +39,7 @@ class SourceObject:
     program: str | None = None
     granularity: str = "part"
     augmentation: str | None = None
-
+    warnings: tuple[str, ...] = ()  # what an importer dropped or guessed; `data import` prints them once
 
 def split_of(object_id: str) -> str:
     """train / val / test from SHA-256 of the object id: every view of an object lands together."""

@@ -42,7 +42,7 @@ def _lid_obj() -> str:
 
 def test_import_skips_objects_that_fail_and_writes_the_rest(tmp_path, capsys):
     good = _object(tmp_path, "good_box", _lid_obj())
-    # loads, but MuJoCo refuses the mesh when the scene is compiled: a single triangle
+    # its only mesh is a single triangle (MuJoCo needs 4 vertices): the piece is dropped, no geometry is left
     unrenderable = _object(tmp_path, "bad_triangle", "v 0 0 0\nv 0.3 0 0\nv 0 0.3 0\nf 1 2 3\n")
     unloadable = _object(tmp_path, "bad_missing_mesh", None)  # the URDF names a mesh that is not there
     out = tmp_path / "out"

@@ -163,7 +163,8 @@ def test_convert_cli_prints_each_warning_once(tmp_path, capsys):
 
 
 def test_data_import_of_a_dirty_object_renders(tmp_path, capsys):
-    """`jax3dc data import` keeps the object (its bad pieces dropped) instead of skipping it."""
+    """`jax3dc data import` keeps the object (its bad pieces dropped) instead of skipping it, and
+    names each dropped file once on stderr."""
     _meshes(tmp_path / "obj")
     _urdf(tmp_path / "obj", ["body.obj", "tri.obj", "gone.obj", "garbage.stl"], ["lid.obj"])
     out = tmp_path / "out"
@@ -173,3 +174,5 @@ def test_data_import_of_a_dirty_object_renders(tmp_path, capsys):
     assert code == 0 and "Traceback" not in err, err
     manifest = load_manifest(out)
     assert manifest["skipped"] == {} and manifest["shards"]["train-00000.array_record"]["records"] == 1
+    for name in ("tri.obj", "gone.obj", "garbage.stl"):
+        assert sum(name in line for line in err.splitlines() if line.startswith("warning:")) == 1, (name, err)
