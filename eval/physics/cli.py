@@ -19,6 +19,7 @@ from typing import Any
 
 from jax3dc.cli import command_group, positive_int
 from jax3dc.errors import InputFileError
+from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES
 
 VERDICT_HELP = (
     'The verdict is JSON: {"ok": bool, "joints": {"<part id>": {"ok": bool, "reasons": [...]}}, '
@@ -40,6 +41,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                     "write it to --out. Exit code 0 whatever the verdict; 1 on unusable input. " + VERDICT_HELP)
     check.add_argument("structure", type=Path, help="structure O as JSON (SPEC §2)")
     check.add_argument("--parts", type=Path, required=True, help="folder of part meshes <id>.obj|.stl|.ply|.glb (nu)")
+    check.add_argument("--max-part-faces", type=positive_int, default=MAX_PART_FACES, metavar="N",
+                       help="refuse a part mesh file of more triangles (default: %(default)s)")
+    check.add_argument("--max-faces", type=positive_int, default=PHYSICS_MAX_FACES, metavar="N",
+                       help="refuse an object of more triangles in all: the check's time and memory grow with "
+                            "them (default: %(default)s)")
     check.add_argument("--scale", type=float, default=None,
                        help="metres per nu (default: 'scale' of a meta.json beside the structure, else 1)")
     check.add_argument("--out", type=Path, default=None, help="also write the verdict JSON here")
@@ -85,6 +91,7 @@ def _checked_scale(scale: float, where: Path) -> float:
 
 def run_check(args: argparse.Namespace) -> int:
     from eval.physics.verdict import check_object
+    from jax3dc.geometry.mesh_size import check_object_faces
     from jax3dc.geometry.parts import load_parts
     from jax3dc.structure import parse_structure
 
@@ -92,7 +99,8 @@ def run_check(args: argparse.Namespace) -> int:
         text = args.structure.read_text(encoding="utf-8")
     except OSError as e:
         raise InputFileError(args.structure, f"cannot read: {e.strerror or e}") from None
-    parts = load_parts(args.parts)
+    parts = load_parts(args.parts, args.max_part_faces)
+    check_object_faces({p: len(m.faces) for p, m in parts.items()}, args.max_faces, "the physics check")
     structure = parse_structure(text, part_ids=parts.keys())
     scale = _checked_scale(args.scale if args.scale is not None else _scale_beside(args.structure), args.structure)
     verdict = check_object(structure, parts, scale, backend=args.backend, mounted=args.mounted)

@@ -17,6 +17,7 @@ from jax3dc.export.blender import export_blender
 from jax3dc.export.gltf import export_gltf
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import export_urdf
+from jax3dc.geometry.mesh_size import PHYSICS_MAX_FACES, check_object_faces
 from jax3dc.export.usd import export_usd
 from jax3dc.structure.schema import Structure
 from jax3dc.viewer import ViewerInputs, write_viewer
@@ -50,7 +51,10 @@ def _plain(value):
 
 def write_physics(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path,
                   scale: float) -> tuple[Path, dict]:
-    """physics.json: the plausibility verdict (ok, per-joint reasons, checks) of the object."""
+    """physics.json: the plausibility verdict (ok, per-joint reasons, checks) of the object; an object
+    over PHYSICS_MAX_FACES triangles is refused before the check (its exports are already written)."""
+    check_object_faces({p: len(m.faces) for p, m in parts.items()}, PHYSICS_MAX_FACES, "the physics check",
+                       flag="`jax3dc physics check --max-faces` on the exported parts")
     verdict = _plain(check_object(structure, parts, scale))
     path = out / "physics.json"
     path.write_text(json.dumps(verdict, indent=1, sort_keys=True) + "\n", encoding="utf-8")

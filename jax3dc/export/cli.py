@@ -7,8 +7,10 @@ import json
 import math
 from pathlib import Path
 
+from jax3dc.cli import positive_int
 from jax3dc.errors import InputFileError
 from jax3dc.export.files import check_file_stem
+from jax3dc.geometry.mesh_size import MAX_PART_FACES
 
 FORMATS = ("urdf", "mjcf", "gltf", "usd", "blender")
 
@@ -53,7 +55,7 @@ def _run(args: argparse.Namespace) -> int:
         text = structure_path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise InputFileError(structure_path, f"cannot read the structure: {getattr(e, 'strerror', None) or e}") from None
-    parts = load_parts(args.parts)
+    parts = load_parts(args.parts, args.max_part_faces)
     structure = parse_structure(text, part_ids=parts.keys())
     scale = args.scale
     source = "--scale"
@@ -83,6 +85,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("structure", metavar="FILE.json", help="the structure document")
     parser.add_argument("--parts", required=True, metavar="DIR", help="folder with one mesh per part, named <id>.obj")
+    parser.add_argument("--max-part-faces", type=positive_int, default=MAX_PART_FACES, metavar="N",
+                        help="refuse a part mesh file of more triangles (default: %(default)s)")
     parser.add_argument("--scale", type=float, metavar="METRES_PER_NU",
                         help="metres per normalised unit (default: 'scale' of meta.json beside FILE.json, else 1)")
     parser.add_argument("--format", required=True, choices=FORMATS,

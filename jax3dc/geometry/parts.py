@@ -19,13 +19,13 @@ from jax3dc.structure.schema import Box
 PART_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply", ".glb")
 
 
-def load_parts(directory: str | Path) -> dict[int, trimesh.Trimesh]:
+def load_parts(directory: str | Path, max_faces: int = MAX_PART_FACES) -> dict[int, trimesh.Trimesh]:
     """Part id -> mesh of every ``<id>.<suffix>`` file in ``directory``, sorted by id.
 
     A GLB (a scene) is flattened into one mesh with its node transforms applied. Raises
     InputFileError for a missing directory, no part files, a mesh file whose name is not a
     positive integer, two files with the same id, or a file that cannot be read or has no
-    triangles.
+    triangles, or more than ``max_faces`` triangles in one file (counted before the mesh is built).
     """
     directory = Path(directory)
     if not directory.is_dir():
@@ -43,18 +43,19 @@ def load_parts(directory: str | Path) -> dict[int, trimesh.Trimesh]:
         paths[part_id] = path
     if not paths:
         raise InputFileError(directory, f"no part meshes (<id>{'|'.join(PART_SUFFIXES)}) in the directory")
-    return {part_id: load_part_mesh(paths[part_id]) for part_id in sorted(paths)}
+    return {part_id: load_part_mesh(paths[part_id], max_faces) for part_id in sorted(paths)}
 
 
-def load_part_mesh(path: Path) -> trimesh.Trimesh:
+def load_part_mesh(path: Path, max_faces: int = MAX_PART_FACES) -> trimesh.Trimesh:
     """One part's triangles exactly as stored (no merging or reordering of vertices)."""
     kwargs = {"skip_materials": True} if path.suffix.lower() == ".obj" else {}
     try:
         declared = declared_faces(path)
     except OSError as e:
         raise InputFileError(path, f"cannot read the mesh: {e.strerror or e}") from None
-    if declared is not None and declared > MAX_PART_FACES:
-        raise InputFileError(path, f"the mesh has {declared} faces; a part has at most {MAX_PART_FACES}")
+    if declared is not None and declared > max_faces:
+        raise InputFileError(path, f"the mesh has {declared} faces; a part has at most {max_faces} "
+                                   "(raise it with --max-part-faces)")
     try:
         loaded = trimesh.load(str(path), force="mesh", process=False, **kwargs)
     except Exception as e:  # trimesh raises many exception types for corrupt files
@@ -63,8 +64,9 @@ def load_part_mesh(path: Path) -> trimesh.Trimesh:
     vertices = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)
     if len(faces) == 0:
         raise InputFileError(path, "the mesh has no triangles")
-    if len(faces) > MAX_PART_FACES:
-        raise InputFileError(path, f"the mesh has {len(faces)} triangles; a part has at most {MAX_PART_FACES}")
+    if len(faces) > max_faces:
+        raise InputFileError(path, f"the mesh has {len(faces)} triangles; a part has at most {max_faces} "
+                                   "(raise it with --max-part-faces)")
     if not np.isfinite(vertices).all():
         raise InputFileError(path, "the mesh has non-finite vertex coordinates")
     if np.abs(vertices).max() > MAX_COORDINATE:

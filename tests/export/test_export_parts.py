@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from jax3dc.errors import InputFileError
+from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.geometry.mass import mass_properties, mesh_volume
+from jax3dc.geometry.mesh_size import check_object_faces
 from jax3dc.geometry.parts import load_parts, normalise_parts, part_boxes, save_parts
 from jax3dc.materials import MATERIALS
 from jax3dc.structure.schema import FAMILIES
@@ -130,3 +131,13 @@ def test_open_mesh_uses_its_hull_and_flat_mesh_a_thin_box():
     props = mass_properties(flat, 1000.0, min_thickness_m=0.01)
     assert props.solid == "box" and props.mass == pytest.approx(1000 * 0.01)
     assert np.all(np.linalg.eigvalsh(props.inertia) > 0)
+
+
+def test_face_caps_refuse_above_and_accept_at_the_cap(tmp_path):
+    save_parts({1: trimesh.creation.box(), 2: trimesh.creation.box()}, tmp_path)  # 12 triangles each
+    assert set(load_parts(tmp_path, max_faces=12)) == {1, 2}
+    with pytest.raises(InputFileError, match="at most 11 .*--max-part-faces"):
+        load_parts(tmp_path, max_faces=11)
+    check_object_faces({1: 12, 2: 12}, 24, "the check")
+    with pytest.raises(Jax3dcError, match=r"24 triangles \(part 1: 12\); the check takes at most 23 \(raise it with --max-faces\)"):
+        check_object_faces({1: 12, 2: 12}, 23, "the check")

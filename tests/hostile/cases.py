@@ -309,6 +309,10 @@ def _object_cases(inputs: Path, out: Path) -> list[Case]:
     (far_parts / "1.obj").write_text(_BOX_OBJ)
     (far_parts / "2.obj").write_text("v 1e308 0 0\nv 0 1e308 0\nv 0 0 1e308\nv -1e308 -1e308 -1e308\n"
                                      "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
+    many_parts = folder / "many_faces"  # under the per-file cap, over the physics check's per-object one
+    many_parts.mkdir()
+    (many_parts / "1.obj").write_text(_BOX_OBJ)
+    (many_parts / "2.obj").write_text("v 0 0 2\nv 1 0 2\nv 0 1 2\nv 0 0 3\n" + "f 1 2 3\n" * 310_000)
     deep, pair = _write(folder / "deep.json", _chain(1000)), _write(folder / "pair.json", _chain(2))
     inputs_by_name = {"chain_1000": (deep, deep_parts, "more than 400 parts deep"),
                       "far_vertices": (pair, far_parts, "beyond")}
@@ -321,6 +325,10 @@ def _object_cases(inputs: Path, out: Path) -> list[Case]:
         cases.append(Case("export", f"{name}_mjcf", ("export", str(structure), "--parts", str(parts), "--format", "mjcf",
                                                     "--out", str(out / f"export_{name}_mjcf")), expect))
         cases.append(Case("physics check", name, ("physics", "check", str(structure), "--parts", str(parts)), expect))
+    cases.append(Case("physics check", "object_faces", ("physics", "check", str(pair), "--parts", str(many_parts)),
+                      "--max-faces"))
+    cases.append(Case("physics check", "part_faces", ("physics", "check", str(pair), "--parts", str(many_parts),
+                                                      "--max-part-faces", "1000"), "--max-part-faces"))
     return cases
 
 
