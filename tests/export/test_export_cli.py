@@ -73,7 +73,7 @@ def test_bad_input_is_one_line_and_exit_1(tmp_path, capsys, change, message):
 
 def _export_all(folder: Path, out: Path, seed: str) -> None:
     code = ("import sys; from jax3dc.cli import main\n"
-            "for fmt in ('urdf', 'mjcf', 'gltf', 'blender'):\n"
+            "for fmt in ('urdf', 'mjcf', 'gltf', 'blender', 'usd'):\n"
             "    assert main(['export', sys.argv[1], '--parts', sys.argv[2], '--format', fmt, '--out', sys.argv[3],"
             " '--scale', '0.9']) == 0\n")
     env = dict(os.environ, PYTHONHASHSEED=seed, PYTHONPATH=str(REPO))
@@ -86,7 +86,7 @@ def test_separate_processes_write_identical_bytes(tmp_path):
     _export_all(folder, tmp_path / "a", "1")
     _export_all(folder, tmp_path / "b", "2")
     files = sorted(p.relative_to(tmp_path / "a") for p in (tmp_path / "a").rglob("*") if p.is_file())
-    assert len(files) == 4 + 5  # four main files and one mesh per part
+    assert len(files) == 5 + 5  # five main files and one mesh per part
     for rel in files:
         assert (tmp_path / "a" / rel).read_bytes() == (tmp_path / "b" / rel).read_bytes(), rel
 

@@ -5,9 +5,6 @@ metres, the MJCF's masses, colliders that fit each part, and the same bytes for 
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import mujoco
@@ -22,13 +19,10 @@ from export_cases import CASES, EVIL_NAME, box
 from jax3dc.export.assembly import label_of
 from jax3dc.export.mjcf import mjcf_model
 from jax3dc.export.usd import export_usd, usd_model
-from jax3dc.geometry.parts import save_parts
 from jax3dc.materials import MATERIALS
-from jax3dc.structure import to_json
 from jax3dc.structure.schema import Material, Node, Structure
 from tests.shared_fixtures import partnet_object
 
-REPO = Path(__file__).resolve().parents[2]
 SCALE = 0.8
 PARTNET = ("box_rotate_100189", "bucket_swing_100435", "door_8877", "drawer_20453", "microwave_7119",
            "safe_rotate_101593", "switch_100952", "toaster_move_103482", "window_rotate_103135")
@@ -224,24 +218,3 @@ def test_names_and_relations_from_data_round_trip_and_prim_names_are_identifiers
     for prim in stage.Traverse():
         assert Sdf.Path.IsValidIdentifier(prim.GetName()), prim.GetPath()
     assert (tmp_path / "3-cabinet.v2.usda").is_file()
-
-
-def _cli_export(folder: Path, out: Path, seed: str) -> None:
-    code = ("import sys; from jax3dc.cli import main\n"
-            "assert main(['export', sys.argv[1], '--parts', sys.argv[2], '--format', 'usd', '--out', sys.argv[3],"
-            " '--scale', '0.9']) == 0\n")
-    env = dict(os.environ, PYTHONHASHSEED=seed, PYTHONPATH=str(REPO))
-    subprocess.run([sys.executable, "-c", code, str(folder / "structure.json"), str(folder / "parts"), str(out)],
-                   check=True, env=env, cwd=REPO, capture_output=True)
-
-
-def test_cli_writes_the_same_bytes_in_separate_processes(tmp_path):
-    structure, parts = CASES["two_roots"]()
-    save_parts(parts, tmp_path / "parts")
-    (tmp_path / "structure.json").write_text(to_json(structure, names=True))
-    _cli_export(tmp_path, tmp_path / "a", "1")
-    _cli_export(tmp_path, tmp_path / "b", "2")
-    assert sorted(p.name for p in (tmp_path / "a").iterdir()) == ["structure.usda"]
-    first = (tmp_path / "a" / "structure.usda").read_bytes()
-    assert first == (tmp_path / "b" / "structure.usda").read_bytes()
-    assert len(Usd.Stage.Open(str(tmp_path / "a" / "structure.usda")).GetDefaultPrim().GetChildren()) == 3

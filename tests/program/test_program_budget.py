@@ -102,7 +102,7 @@ def test_deep_nesting_is_a_program_error(text):
 
 
 def test_runaway_scaling_is_refused():
-    text = "a = box(1)\n" + "".join(f"a = scale(a, 1000000)\n" for _ in range(5)) + "part(1, 'a', a)\n"
+    text = "a = box(1)\n" + "".join("a = scale(a, 1000000)\n" for _ in range(5)) + "part(1, 'a', a)\n"
     with pytest.raises(ProgramError) as info:
         run_program(text)
     assert info.value.line == 3 and "coordinates" in info.value.message
