@@ -13,7 +13,8 @@ import json
 from pathlib import Path
 from typing import Any, Iterable
 
-from jax3dc.cli import command_group
+from eval.limits import MAX_SCORED_PARTS
+from jax3dc.cli import command_group, positive_int
 from jax3dc.errors import InputFileError
 
 SUBCOMMAND_MODULES: tuple[str, ...] = ("eval.run",)
@@ -51,7 +52,7 @@ def run_metrics(args: argparse.Namespace) -> int:
     from eval.metrics.score import evaluate
     from eval.metrics.tables import format_tables
 
-    refs = load_references(args.ref)
+    refs = load_references(args.ref, args.max_parts)
     preds = load_predictions(args.pred)
     unknown = len(set(preds) - {r.key for r in refs})
     evaluation = evaluate(_cases_with_progress(refs, preds))
@@ -77,7 +78,7 @@ def run_baselines(args: argparse.Namespace) -> int:
     from eval.metrics.score import evaluate
     from eval.metrics.tables import format_tables
 
-    refs = load_references(args.ref)
+    refs = load_references(args.ref, args.max_parts)
     out = Path(args.out)
     systems = []
     for name in (*BOX_BASELINES, "reference"):
@@ -125,6 +126,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     metrics.add_argument("--ref", required=True, help="references JSONL (structure + part boxes)")
     metrics.add_argument("--out", help="folder for metrics.json and per_object.jsonl (default: PRED with the suffix .metrics)")
     metrics.add_argument("--name", help="row name in the printed tables (default: PRED's file name)")
+    metrics.add_argument("--max-parts", type=positive_int, default=MAX_SCORED_PARTS, metavar="N",
+                         help="refuse a reference object of more parts (default: %(default)s)")
     metrics.set_defaults(func=run_metrics)
 
     baselines = group.add_parser(
@@ -137,6 +140,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     baselines.add_argument("--ref", required=True, help="references JSONL (structure + part boxes)")
     baselines.add_argument("--out", required=True, help="folder for each baseline's predictions and metrics")
+    baselines.add_argument("--max-parts", type=positive_int, default=MAX_SCORED_PARTS, metavar="N",
+                           help="refuse a reference object of more parts (default: %(default)s)")
     baselines.set_defaults(func=run_baselines)
 
     for name in SUBCOMMAND_MODULES:

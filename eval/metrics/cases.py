@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping
 
+from eval.limits import MAX_SCORED_PARTS
 from eval.metrics.score import Case
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.structure import Box, Structure, boxes_from_dict, canonicalize, parse_structure
@@ -96,8 +97,9 @@ def read_jsonl(path: str | Path) -> Iterator[tuple[int, dict[str, Any]]]:
             yield number, item
 
 
-def load_references(path: str | Path) -> list[Reference]:
-    """Parse, validate and canonicalise every reference line (invalid references are an error)."""
+def load_references(path: str | Path, max_parts: int = MAX_SCORED_PARTS) -> list[Reference]:
+    """Parse, validate and canonicalise every reference line (invalid references, or one of more than
+    ``max_parts`` parts, are an error)."""
     refs: list[Reference] = []
     seen: set[str] = set()
     for number, item in read_jsonl(path):
@@ -113,6 +115,9 @@ def load_references(path: str | Path) -> list[Reference]:
             structure = parse_structure(item["structure"])
         except StructureError as e:
             raise InputFileError(path, f"{where}: invalid reference: {e}") from None
+        if len(structure.nodes) > max_parts:
+            raise InputFileError(path, f"{where}: {len(structure.nodes)} parts; the metrics score at most "
+                                       f"{max_parts} per object (raise it with --max-parts)")
         missing = sorted(set(structure.nodes) - set(boxes))
         if missing:
             raise InputFileError(path, f"{where}: no box for parts {missing}")

@@ -380,6 +380,8 @@ def _metric_cases(inputs: Path, out: Path) -> list[Case]:
         "box_wrong_type": (_metric_line(boxes='{"1":{"centroid":"0 0 0","extent":[1,1,1]}}'), "centroid"),
         "invalid_structure": (_metric_line(structure=_structure().replace("Wood", "Unobtainium")), "family"),
         "empty": ("\n\n", "no reference lines"),
+        "many_parts": (_metric_line(structure=_chain(1500), boxes=json.dumps(
+            {str(i): {"centroid": [0, 0, 0], "extent": [1, 1, 1]} for i in range(1, 1501)})), "--max-parts"),
     }
     for name, (text, expect) in refs.items():
         path = folder / f"ref_{name}.jsonl"
