@@ -31,6 +31,7 @@ from flax import nnx
 from jax3dc.errors import InputFileError
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.layers import Dense
+from jax3dc.model.lora import merged_params
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.safetensors_io import iter_tensors, write_safetensors
 from jax3dc.sharding import LOGICAL_RULES, Rules, state_shardings
@@ -235,8 +236,9 @@ def save_pretrained(model: Qwen3VL, config: Qwen3VLConfig, path: str | Path, dty
     """Writes config.json and safetensors (sharded with an index above ``max_shard_bytes``)
     that transformers' ``Qwen3VLForConditionalGeneration.from_pretrained`` loads.
 
-    One tensor at a time is gathered to the host. With several processes every process must
-    call this (the gathers are collective); only process 0 writes.
+    LoRA adapters (jax3dc/model/lora.py) are merged into their kernels, so the folder holds a
+    plain model. One tensor at a time is merged and gathered to the host. With several processes
+    every process must call this (the gathers are collective); only process 0 writes.
     """
     path = Path(path)
     writer = jax.process_index() == 0
@@ -254,10 +256,9 @@ def save_pretrained(model: Qwen3VL, config: Qwen3VLConfig, path: str | Path, dty
             write_safetensors(f, shard)
         written.append((f, list(shard)))
 
-    for p, v in nnx.to_flat_state(nnx.state(model, nnx.Param)):
-        ours = _path_str(p)
+    for ours, value in merged_params(model):
         hf_name, kind = ours_to_hf_name(ours)
-        arr = _to_host(v.get_value())
+        arr = _to_host(value)
         if dtype is not None:
             arr = arr.astype(dtype)
         out_dtype = arr.dtype
