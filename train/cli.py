@@ -19,7 +19,9 @@ def register(subparsers) -> None:
         epilog="Any setting can be changed with --set NAME=VALUE (repeatable), e.g.\n"
                "  jax3dc train --init small --output-dir runs/small --set data=runs/data --set lr=1e-3\n"
                "  jax3dc train --init tiny --set data=synthetic --set seq_len=64 --set mesh.fsdp=4"
-               "   (speed test on built-in counting sequences)\n\n"
+               "   (speed test on built-in counting sequences)\n"
+               "  jax3dc train --init DIR --set data=runs/data --set lora_rank=16 --set lr=1e-4"
+               "   (LoRA: adapters only, bf16 base; hf/ export merged)\n\n"
                "Settings (name (type) = default):\n" + "\n".join(describe_fields()))
     p.add_argument("--init", help="preset name or HF checkpoint directory")
     p.add_argument("--output-dir", help="run directory: checkpoints, metrics.jsonl, hf/ export")

@@ -10,10 +10,13 @@ import dataclasses
 import json
 import typing
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 from jax3dc import sharding
 from jax3dc.errors import Jax3dcError
+
+if TYPE_CHECKING:
+    from jax3dc.model.lora import LoraSpec
 
 
 class ConfigError(Jax3dcError):
@@ -73,6 +76,13 @@ class TrainConfig:
     # Parameters whose '/'-joined path matches any of these regexes get no gradient and no
     # optimiser state.
     freeze: tuple[str, ...] = (r"(^|/)visual/",)
+    # LoRA (jax3dc/model/lora.py): lora_rank > 0 trains only low-rank adapters on the decoder
+    # projections named in lora_targets, scaled by lora_alpha / lora_rank (adapters matching
+    # `freeze` stay frozen too); every base weight is frozen and held in compute_dtype. The HF
+    # export merges the adapters into the kernels. 0: full fine-tuning.
+    lora_rank: int = 0
+    lora_alpha: float = 16.0
+    lora_targets: tuple[str, ...] = ("q_proj", "k_proj", "v_proj", "o_proj", "gate_proj", "up_proj", "down_proj")
     # Numerics: compute dtype for matmuls; master_fp32 keeps trainable weights and optimiser
     # state in float32 (else in the compute dtype, half the memory).
     compute_dtype: str = "bfloat16"
@@ -177,6 +187,16 @@ def sharding_rules(cfg: TrainConfig) -> sharding.Rules:
         raise ConfigError(f"sharding_rules: {e}") from None
 
 
+def lora_spec(cfg: TrainConfig) -> LoraSpec:
+    """The run's LoraSpec (lora_rank must be > 0); ConfigError for an unknown target."""
+    from jax3dc.model.lora import LoraSpec
+
+    try:
+        return LoraSpec(cfg.lora_rank, cfg.lora_alpha, cfg.lora_targets)
+    except ValueError as e:
+        raise ConfigError(str(e)) from None
+
+
 def validate(cfg: TrainConfig) -> None:
     """Reject settings that cannot work before any device work starts (and before the run
     writes anything)."""
@@ -196,6 +216,10 @@ def validate(cfg: TrainConfig) -> None:
         raise ConfigError(f"attention {cfg.attention!r}: expected auto, cudnn or xla")
     if cfg.remat not in ("none", "full"):
         raise ConfigError(f"remat {cfg.remat!r}: expected none or full")
+    if cfg.lora_rank < 0:
+        raise ConfigError(f"lora_rank must be >= 0 (0: no LoRA), got {cfg.lora_rank}")
+    if cfg.lora_rank:
+        lora_spec(cfg)
     if cfg.compute_dtype not in ("bfloat16", "float32", "float16"):
         raise ConfigError(f"compute_dtype {cfg.compute_dtype!r}: expected bfloat16, float32 or float16")
     for name in ("steps", "seq_len", "log_every", "eval_every", "save_every", "keep_last"):

@@ -143,9 +143,10 @@ class Trainer:
 
     def flops_model(self) -> FlopsModel:
         patches = (self.cfg.image_size // self.model.config.vision.patch_size) ** 2 if self.cfg.image_size else 0
-        frozen = model_state.count_params(self.model.frozen)
-        return FlopsModel.from_model_config(self.model.config, vision_params=frozen,
-                                            patches_per_image=patches)
+        frozen = self.model.frozen  # the vision tower's frozen part runs forward only
+        vision = model_state.count_params(frozen["visual"]) if "visual" in frozen else 0
+        return FlopsModel.from_model_config(self.model.config, vision_params=vision,
+                                            patches_per_image=patches, weight_grads=not self.cfg.lora_rank)
 
 
 def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,

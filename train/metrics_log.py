@@ -53,14 +53,19 @@ class FlopsModel:
     vocab: int
     vision_params: int  # whole frozen vision tower incl. mergers
     patches_per_image: int
+    # False with LoRA: frozen decoder weights get no gradient, so each costs 4 FLOPs per token
+    # (forward, input gradient) instead of 6; the adapters' own are negligible at low rank.
+    weight_grads: bool = True
 
     @classmethod
-    def from_model_config(cls, cfg: Any, vision_params: int, patches_per_image: int) -> "FlopsModel":
+    def from_model_config(cls, cfg: Any, vision_params: int, patches_per_image: int,
+                          weight_grads: bool = True) -> "FlopsModel":
         t = cfg.text
         return cls(layers=t.num_hidden_layers, hidden=t.hidden_size, heads=t.num_attention_heads,
                    kv_heads=t.num_key_value_heads, head_dim=t.head_dim,
                    intermediate=t.intermediate_size, vocab=t.vocab_size,
-                   vision_params=vision_params, patches_per_image=patches_per_image)
+                   vision_params=vision_params, patches_per_image=patches_per_image,
+                   weight_grads=weight_grads)
 
     @property
     def dense_params(self) -> int:
@@ -70,7 +75,8 @@ class FlopsModel:
 
     def step_flops(self, rows: int, seq_len: int) -> float:
         """FLOPs of one optimiser step over `rows` sequences of `seq_len` with one image each."""
-        per_token = 6 * self.dense_params + 6 * self.layers * seq_len * self.heads * self.head_dim
+        per_weight = 6 if self.weight_grads else 4
+        per_token = per_weight * self.dense_params + 6 * self.layers * seq_len * self.heads * self.head_dim
         vision = 2 * self.vision_params * self.patches_per_image if self.patches_per_image else 0
         return rows * (seq_len * per_token + vision)
 

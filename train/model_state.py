@@ -20,10 +20,11 @@ from jax.sharding import Mesh
 
 from jax3dc.processing.bpe import config_for_tokenizer
 from jax3dc.model.config import Qwen3VLConfig
+from jax3dc.model.lora import add_lora
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.random_weights import build_random
 from jax3dc.sharding import model_shardings
-from train.config import ConfigError, TrainConfig, sharding_rules
+from train.config import ConfigError, TrainConfig, lora_spec, sharding_rules
 from train.optimizer import trainable_filter
 from train.parallel import state_shardings
 from train.loss import token_loss
@@ -67,21 +68,43 @@ def dtypes(cfg: TrainConfig) -> tuple[jnp.dtype, jnp.dtype]:
 
 
 def _constructor(cfg: TrainConfig, mcfg: Qwen3VLConfig, attention_impl: str | None):
+    """The base model's constructor; with LoRA its weights are stored in the compute dtype (they
+    are all frozen), which halves their memory next to float32 master weights."""
     compute, master = dtypes(cfg)
-    return lambda: Qwen3VL(mcfg, rngs=nnx.Rngs(cfg.seed), dtype=compute, param_dtype=master,
+    base = compute if cfg.lora_rank else master
+    return lambda: Qwen3VL(mcfg, rngs=nnx.Rngs(cfg.seed), dtype=compute, param_dtype=base,
                            attention_impl=attention_impl, remat=cfg.remat == "full")
+
+
+def _with_lora(cfg: TrainConfig, model: Qwen3VL) -> Qwen3VL:
+    """`model` with the run's adapters (in the master dtype) added, or unchanged without LoRA."""
+    if not cfg.lora_rank:
+        return model
+    _, master = dtypes(cfg)
+    return add_lora(model, lora_spec(cfg), rngs=nnx.Rngs(cfg.seed), param_dtype=master)
+
+
+def _place_adapters(model: Qwen3VL, shardings: Any) -> None:
+    """Puts the adapters (built on the host, the same on every process) on their shardings."""
+    def place(x, sharding):
+        host = np.asarray(x)
+        return jax.make_array_from_callback(host.shape, sharding, lambda idx: host[idx])
+
+    nnx.update(model, jax.tree.map(place, nnx.state(model, nnx.LoRAParam), shardings))
 
 
 def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, tokenizer=None) -> ModelState:
     """Build the model on the mesh: random weights for a preset (sized to `tokenizer` when one
-    is given), else the HF checkpoint's."""
+    is given), else the HF checkpoint's; with LoRA, fresh adapters on it (B = 0: the model's
+    output is the base model's until the first update)."""
     mcfg = model_config(cfg.init)
     if tokenizer is not None and cfg.init in PRESETS:
         mcfg = config_for_tokenizer(mcfg, tokenizer)  # vocabulary and special ids of the run's tokenizer
     compute, _ = dtypes(cfg)
     build = _constructor(cfg, mcfg, attention_impl)
-    is_trainable = trainable_filter(cfg.freeze)
-    graphdef, abs_train, abs_frozen = nnx.split(nnx.eval_shape(build), is_trainable, ...)
+    is_trainable = trainable_filter(cfg.freeze, adapters_only=cfg.lora_rank > 0)
+    abstract = nnx.eval_shape(lambda: _with_lora(cfg, build()))
+    graphdef, abs_train, abs_frozen = nnx.split(abstract, is_trainable, ...)
     rules = sharding_rules(cfg)
     train_sh, frozen_sh = state_shardings(abs_train, mesh, rules), state_shardings(abs_frozen, mesh, rules)
     if not jax.tree.leaves(abs_train):
@@ -90,30 +113,30 @@ def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, toke
     if cfg.init in PRESETS:
         # One small fill program per parameter shape: a jitted 4B initialiser compiles for minutes.
         model = build_random(build, seed=cfg.seed, shardings=model_shardings(nnx.eval_shape(build), mesh, rules))
-        _, t, f = nnx.split(model, is_trainable, ...)
-        cast = jax.jit(lambda t, f: (t, cast_floats(f, compute)), out_shardings=(train_sh, frozen_sh))
-        trainable, frozen = cast(t, f)
     else:
-        trainable, frozen = _load_hf(cfg, mesh, attention_impl, is_trainable, train_sh, frozen_sh, compute)
+        model = _load_hf(cfg, mesh, attention_impl)
+    model = _with_lora(cfg, model)
+    _place_adapters(model, state_shardings(nnx.state(abstract, nnx.LoRAParam), mesh, rules))
+    _, t, f = nnx.split(model, is_trainable, ...)
+    cast = jax.jit(lambda t, f: (t, cast_floats(f, compute)), out_shardings=(train_sh, frozen_sh))
+    trainable, frozen = cast(t, f)
     return ModelState(mcfg, graphdef, trainable, frozen, train_sh, frozen_sh)
 
 
-def _load_hf(cfg, mesh, attention_impl, is_trainable, train_sh, frozen_sh, compute):
+def _load_hf(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None) -> Qwen3VL:
     from jax3dc.model import params as hf_params
 
-    _, master = dtypes(cfg)
-    model, _ = hf_params.load_pretrained(cfg.init, dtype=master, mesh=mesh, rules=sharding_rules(cfg),
-                                         compute_dtype=compute,
-                                         attention_impl=attention_impl,
-                                         remat=cfg.remat == "full")
-    _, t, f = nnx.split(model, is_trainable, ...)
-    cast = jax.jit(lambda t, f: (t, cast_floats(f, compute)), out_shardings=(train_sh, frozen_sh))
-    return cast(t, f)
+    compute, master = dtypes(cfg)
+    model, _ = hf_params.load_pretrained(cfg.init, dtype=compute if cfg.lora_rank else master, mesh=mesh,
+                                         rules=sharding_rules(cfg), compute_dtype=compute,
+                                         attention_impl=attention_impl, remat=cfg.remat == "full")
+    return model
 
 
 def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None) -> None:
     """Write the model as an HF directory (safetensors + config.json, and the tokenizer and
     image-processor files the run used, so generation encodes prompts exactly as training did).
+    LoRA adapters are merged into their kernels: the directory holds a plain model.
 
     With several processes every process must call this (each tensor is gathered from all of
     them, one at a time); only process 0 writes."""

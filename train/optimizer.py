@@ -41,12 +41,13 @@ def path_name(path: Sequence) -> str:
     return "/".join(str(getattr(p, "key", getattr(p, "idx", p))) for p in path)
 
 
-def trainable_filter(freeze: Sequence[str]) -> nnx.filterlib.Filter:
-    """nnx filter: Params whose path matches none of the `freeze` regexes."""
+def trainable_filter(freeze: Sequence[str], adapters_only: bool = False) -> nnx.filterlib.Filter:
+    """nnx filter: Params whose path matches none of the `freeze` regexes; with `adapters_only`
+    (LoRA) only the adapters (nnx.LoRAParam) among them, so every base weight is frozen."""
     patterns = [re.compile(p) for p in freeze]
 
     def is_frozen(path, _value) -> bool:
         name = path_name(path)
         return any(p.search(name) for p in patterns)
 
-    return nnx.All(nnx.Param, nnx.Not(is_frozen))
+    return nnx.All(nnx.LoRAParam if adapters_only else nnx.Param, nnx.Not(is_frozen))
