@@ -26,6 +26,7 @@ from data_pipeline.samples import SourceObject, derived_rng
 from data_pipeline.views import move_joint
 from jax3dc.errors import Jax3dcError
 from jax3dc.geometry.parts import part_boxes
+from jax3dc.mounted import is_mounted
 from jax3dc.structure import boxes_from_dict
 
 # meta["theta"] is rounded to 4 decimals, so a re-posed part may sit up to ~1e-4 nu off; boxes
@@ -52,13 +53,6 @@ def record_parts(record: Record, sources: Mapping[str, Path] | None = None
         parts = move_joint(source.structure, source.parts, int(moved), float(meta["theta"])).parts
     _check_boxes(parts, record)
     return parts, float(meta["scale_m_per_nu"]), is_mounted(str(meta.get("category", "")))
-
-
-def is_mounted(category: str) -> bool:
-    """Whether objects of ``category`` are fixed in place in use, as the factory registry says
-    (faucet, toilet, door, window); matched without case so PartNet-Mobility's "Door" counts."""
-    factory = FACTORIES.get(category.lower())
-    return factory is not None and factory.mounted
 
 
 def _source_spec(record: Record, sources: Mapping[str, Path]) -> SourceSpec:

@@ -12,6 +12,7 @@ import trimesh
 from data_pipeline.factories import appliances, furniture, household, shelves, small_objects, storage
 from data_pipeline.factories.writer import Normalised, ProgramWriter
 from jax3dc.errors import Jax3dcError
+from jax3dc.mounted import MOUNTED_CATEGORIES
 from jax3dc.structure.schema import Structure
 
 Build = Callable[[ProgramWriter, np.random.Generator], None]
@@ -83,12 +84,8 @@ _SHELVES: dict[str, Build] = {
     "triangle_shelf": shelves.triangle_shelf,
 }
 
-# Fixed in place where they are used: a faucet on its sink, a toilet bolted to the floor, a door
-# frame and a window frame set in a wall.
-_MOUNTED = frozenset({"faucet", "toilet", "door", "window"})
-
-FACTORIES: dict[str, Factory] = {
-    **{name: Factory(name, build, mounted=name in _MOUNTED) for name, build in _BUILDS.items()},
+FACTORIES: dict[str, Factory] = {  # mounted: fixed in place in use (jax3dc.mounted)
+    **{name: Factory(name, build, mounted=name in MOUNTED_CATEGORIES) for name, build in _BUILDS.items()},
     **{name: Factory(name, build, instance_heavy=True) for name, build in _SHELVES.items()},
 }
 
