@@ -4,7 +4,7 @@ The check is the interpenetration sweep: kinematics + collision per joint state,
 deepest contact per body pair (MJX: kinematics, an oriented-box broad phase and MJX's convex narrow
 phase on the pairs it keeps, ``eval.physics.mjx_backend``) — what ``eval.physics`` evaluates for rest, sweep and random joint
 combinations. Objects come from the procedural factories (convex pieces from
-``eval.physics.collision_shapes``); states are uniform in the joint ranges. Printed per object
+``jax3dc.geometry.convex_pieces``); states are uniform in the joint ranges. Printed per object
 structure: MJX compile time and states/s; C states/s on one process (the per-state loop), on one
 process per core (pool started and warmed before the clock: start-up printed apart) and by
 threaded ``mujoco.rollout`` with a distance sensor per body pair (no GIL); the ratio is against

@@ -29,6 +29,3 @@ GRAVITY_JOINT_DRIFT = 0.2  # held joints may sag this much (rad for hinges, nu f
 
 SWEEP_STEPS = 9  # states per joint sweep, both limits included
 RANDOM_COMBINATIONS = 32  # random joint-combination states per object
-HULL_MAX_VERTICES = 32  # vertex cap of each collision hull (MJX's convex collision is per vertex)
-CONCAVE_EXCESS_NU3 = 2e-4  # a closed piece whose hull exceeds its volume by this much is decomposed (a 0.06 nu pocket)
-DECOMPOSITION_DEPTH = 2  # voxel size of a concave component: its largest extent / (8 * 2**depth)

@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from jax3dc.cli import positive_int
-from jax3dc.errors import InputFileError
+from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.export.files import check_file_stem
 from jax3dc.geometry.mesh_size import MAX_PART_FACES
 
@@ -46,6 +46,16 @@ def _scale_from_meta(structure_path: Path) -> float | None:
     return float(scale)
 
 
+def _category_from_meta(structure_path: Path) -> str | None:
+    """The ``category`` of a ``meta.json`` beside the structure file (a data build writes it), if any."""
+    meta_path = structure_path.with_name("meta.json")
+    try:
+        category = json.loads(meta_path.read_text(encoding="utf-8")).get("category") if meta_path.is_file() else None
+    except (OSError, UnicodeDecodeError, ValueError, AttributeError) as e:
+        raise InputFileError(meta_path, f"cannot read the category: {e}") from None
+    return category if isinstance(category, str) else None
+
+
 def _run(args: argparse.Namespace) -> int:
     from jax3dc.geometry.parts import load_parts
     from jax3dc.structure import parse_structure
@@ -69,9 +79,22 @@ def _run(args: argparse.Namespace) -> int:
         name = check_file_stem(args.name or structure_path.stem)
     except ValueError as e:
         raise InputFileError(structure_path, str(e)) from None
-    path = _exporter(args.format)(structure, parts, args.out, scale, model_name=name)
+    if args.format != "mjcf" and (args.free or args.actuators or args.mounted is not None):
+        raise Jax3dcError("--free, --mounted and --actuators are options of --format mjcf")
+    base = ""
+    if args.format == "mjcf":
+        from jax3dc.mounted import is_mounted
+        category = _category_from_meta(structure_path)
+        mounted = is_mounted(category) if args.mounted is None else args.mounted
+        path = _exporter(args.format)(structure, parts, args.out, scale, model_name=name, free=args.free,
+                                      mounted=mounted, actuators=args.actuators)
+        base = f", {'free' if args.free and not mounted else 'fixed'} base"
+        if mounted:
+            base += " (mounted: " + ("--mounted" if args.mounted else f"category {category}") + ")"
+    else:
+        path = _exporter(args.format)(structure, parts, args.out, scale, model_name=name)
     joints = len(structure.joints())
-    print(f"wrote {path} ({len(structure.nodes)} parts, {joints} joints, {scale:g} m per nu from {source})")
+    print(f"wrote {path} ({len(structure.nodes)} parts, {joints} joints, {scale:g} m per nu from {source}{base})")
     return 0
 
 
@@ -94,4 +117,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                              "usd (one .usda with UsdPhysics), blender (a Python script to run in Blender)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
     parser.add_argument("--name", help="model and main file name (default: the stem of FILE.json)")
+    parser.add_argument("--free", action="store_true",
+                        help="mjcf: a free joint on the root, so the object stands on a floor, falls or can be pushed "
+                             "(default: the root is fixed to the world); a mounted object keeps its fixed base")
+    parser.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=None,
+                        help="mjcf: the object is fixed in place in use (a faucet, a toilet, a door or window frame), "
+                             "so its base stays fixed even with --free (default: from the 'category' of meta.json "
+                             "beside FILE.json: faucet, toilet, door and window are mounted)")
+    parser.add_argument("--actuators", action="store_true",
+                        help="mjcf: a position servo per joint (servo_<id>, control = target angle in radians or "
+                             "position in metres)")
     parser.set_defaults(func=_run)

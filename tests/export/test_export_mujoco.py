@@ -86,9 +86,8 @@ def test_mjcf_material_colour_and_friction_come_from_the_family(tmp_path):
     model, _ = _load("mjcf", structure, parts, tmp_path)
     for pid, node in structure.nodes.items():
         props = MATERIALS[structure.materials[node.material].family]
-        geom = model.geom(f"geom_{pid}")
-        assert geom.friction[0] == pytest.approx(props.friction)
-        np.testing.assert_allclose(model.mat_rgba[geom.matid[0]], props.rgba, atol=1e-6)
+        assert model.geom(f"collision_{pid}_0").friction[0] == pytest.approx(props.friction)
+        np.testing.assert_allclose(model.mat_rgba[model.geom(f"visual_{pid}").matid[0]], props.rgba, atol=1e-6)
 
 
 @pytest.mark.parametrize("fmt", sorted(EXPORTERS))

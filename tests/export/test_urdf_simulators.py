@@ -1,5 +1,6 @@
 """The URDF export loads in PyBullet and in yourdfpy with the joints, axes, limits, link tree,
-masses, inertias and collision shapes that the MJCF export has in MuJoCo.
+masses and inertias that the MJCF export has in MuJoCo, and collides as the part's solid (its mesh,
+or the box the MJCF shows for a flat part; the MJCF itself collides through convex pieces).
 
 Objects: every factory category, the PartNet-Mobility samples (through the project's importer)
 and the hand-built cases (a flat part that collides as a box, a scene with two roots, a slanted
@@ -121,8 +122,8 @@ def _mujoco(path: Path) -> Summary:
         parent = model.body_parentid[b]
         link = Link(model.body(parent).name if parent else None, model.body_mass[b], data.xipos[b].copy(),
                     _world_inertia(data.ximat[b].reshape(3, 3), model.body_inertia[b]))
-        assert model.body_geomnum[b] == 1, model.body(b).name
-        geom = model.body_geomadr[b]
+        (geom,) = [g for g in range(model.ngeom) if model.geom_bodyid[g] == b and model.geom(g).name.startswith("visual_")]
+        # the MJCF collides through convex pieces; its visual geom is the part's solid (mesh or flat box)
         link.collision = "box" if model.geom_type[geom] == int(mujoco.mjtGeom.mjGEOM_BOX) else "mesh"
         if link.collision == "box":
             link.box_size, link.box_centre = 2 * model.geom_size[geom], data.geom_xpos[geom].copy()
@@ -275,7 +276,7 @@ def test_masses_and_inertias_agree_with_mujoco(loaded: Loaded) -> None:
 
 
 def test_collision_shapes_agree_with_mujoco(loaded: Loaded) -> None:
-    """Flat parts collide as the MJCF's box; every other part as its mesh, found beside the URDF."""
+    """Flat parts collide as the box the MJCF shows them as; every other part as its mesh, found beside the URDF."""
     for loader, summary in _urdf_views(loaded).items():
         for name, want in loaded.mujoco.links.items():
             got = summary.links[name]

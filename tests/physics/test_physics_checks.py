@@ -12,11 +12,10 @@ import pytest
 import trimesh
 
 from data_pipeline.factories import generate_object
-from eval.physics.collision_shapes import convex_pieces
 from eval.physics.mutations import mutations_of
 from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.tolerances import HULL_MAX_VERTICES
 from eval.physics.verdict import check_object
+from jax3dc.geometry.convex_pieces import HULL_MAX_VERTICES, convex_pieces
 
 
 @pytest.fixture(scope="module")
@@ -76,7 +75,7 @@ def test_simulation_model_has_what_the_checks_need(cabinet):
     assert m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_FILTERPARENT
     assert int(m.jnt_type[0]) == int(mujoco.mjtJoint.mjJNT_FREE)
     assert any(int(t) == int(mujoco.mjtGeom.mjGEOM_PLANE) for t in m.geom_type)
-    # collision pieces carry the material's density: mass of the metre-scale object is plausible (kg)
+    # inertials from the parts' solids and densities: mass of the metre-scale object is plausible (kg)
     total = float(m.body_subtreemass[1])
     assert 1.0 < total < 500.0
     # visual geoms do not collide

@@ -10,12 +10,12 @@ import numpy as np
 import trimesh
 
 from data_pipeline.factories import generate_object
-from eval.physics.collision_shapes import convex_pieces
 from eval.physics.crossing import _piece_boards, crossings
 from eval.physics.ground_truth import imported_objects
 from eval.physics.mutations import mutations_of
 from eval.physics.tolerances import CROSSING_MARGIN_NU
 from eval.physics.verdict import check_object
+from jax3dc.geometry.convex_pieces import convex_pieces
 from tests.shared_fixtures import partnet_object
 
 
