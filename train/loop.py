@@ -182,26 +182,38 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
     timer, timed_steps, wait_s = None, 0, 0.0
     deadline = time.monotonic() + 60 * cfg.time_limit_min if cfg.time_limit_min else None
     step = start
+    started = time.perf_counter()
     try:
         for step in range(start + 1, cfg.steps + 1):
             waited = time.perf_counter()
             batch = next(loader)
             wait_s += time.perf_counter() - waited
             metrics = trainer.train_step(batch)
-            values = {k: float(to_host(v)) for k, v in metrics.items()}
-            if not math.isfinite(values["loss"]):
-                ckpt.wait()
-                good = ckpt.latest_step()
-                raise NonFiniteLossError(
-                    f"loss is {values['loss']} at step {step}; stopped without saving it. Last good "
-                    f"checkpoint: {'step %d in %s' % (good, ckpt.directory) if good else 'none'}")
-            last_loss = values["loss"]
             last = step == cfg.steps or _out_of_time(deadline)
-            if timer is None:  # the first step compiles: time from its end
-                timer, wait_s = time.perf_counter(), 0.0
+            saving = step % cfg.save_every == 0 or last
+            validating = bool(cfg.eval_batches) and (step % cfg.eval_every == 0 or last)
+            logging = step % cfg.log_every == 0 or last
+            first = timer is None
+            # Metrics stay on the device between log steps, so the host dispatches the next steps
+            # while this one runs; they are read back to log, before a checkpoint (a non-finite loss
+            # is never saved), on the compiling first step, and every step when a caller watches.
+            values: dict[str, float] = {}
+            if logging or saving or validating or first or on_step is not None:
+                values = {k: float(to_host(v)) for k, v in metrics.items()}
+                if not math.isfinite(values["loss"]):
+                    ckpt.wait()
+                    good = ckpt.latest_step()
+                    raise NonFiniteLossError(
+                        f"loss is {values['loss']} at step {step} (read back every {cfg.log_every} steps, so it may "
+                        f"have turned non-finite a few steps before); stopped without saving it. Last good checkpoint: "
+                        f"{'step %d in %s' % (good, ckpt.directory) if good else 'none'}")
+                last_loss = values["loss"]
+            if first:  # the first step compiles: log its time, and time the rest from its end
+                values["compile_s"] = time.perf_counter() - started - wait_s
+                timer, wait_s, logging = time.perf_counter(), 0.0, True
             else:
                 timed_steps += 1
-            if step % cfg.log_every == 0 or last:
+            if logging:
                 if timed_steps:
                     dt = (time.perf_counter() - timer) / timed_steps
                     values["tokens_per_s"] = tokens_per_step / dt
@@ -213,11 +225,11 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                 values.update({f"skipped_{k}": float(v) for k, v in getattr(loader, "skipped", {}).items()})
                 log.write(step, values)
             val_loss = None
-            if cfg.eval_batches and (step % cfg.eval_every == 0 or last):
+            if validating:
                 val_loss = trainer.validate(make_loader(cfg, trainer.model.config, "val", trainer.tokenizer, trainer.processor), cfg.eval_batches)
                 best_val = val_loss if best_val is None else min(best_val, val_loss)
                 log.write(step, {"loss": val_loss}, kind="val")
-            if step % cfg.save_every == 0 or last:
+            if saving:
                 trainer.save(ckpt, loader, val_loss, best_val)
             log.advance()
             if on_step is not None:
