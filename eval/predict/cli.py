@@ -50,10 +50,11 @@ def run(args: argparse.Namespace) -> int:
     result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
                      scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
                      constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
-                     on_output=show, progress=True)
+                     mounted=args.mounted, on_output=show, progress=True)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
-    print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check {verdict} (see physics.json)")
+    held = " with its root held (--mounted)" if args.mounted else ""
+    print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check{held} {verdict} (see physics.json)")
     return 0
 
 
@@ -88,6 +89,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--repair", action="store_true",
                    help="move the pivot of each hinge the physics check flags to where child and parent meet, "
                    "kept only when the verdict improves; repairs.json lists them")
+    p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=False,
+                   help="the object is fixed in place in use (a faucet, a toilet, a door or window frame): the "
+                        "physics check holds its root instead of standing it free on a floor, and the candidates "
+                        "and repairs are judged so (default: not mounted; an image names no category)")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
                    help="model compute dtype (float32 on CPU is slower but exact)")
     p.set_defaults(func=run)

@@ -50,12 +50,13 @@ def _plain(value):
 
 
 def write_physics(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path,
-                  scale: float) -> tuple[Path, dict]:
-    """physics.json: the plausibility verdict (ok, per-joint reasons, checks) of the object; an object
-    over PHYSICS_MAX_FACES triangles is refused before the check (its exports are already written)."""
+                  scale: float, mounted: bool = False) -> tuple[Path, dict]:
+    """physics.json: the plausibility verdict (ok, per-joint reasons, checks) of the object, its root
+    held when ``mounted``; an object over PHYSICS_MAX_FACES triangles is refused before the check
+    (its exports are already written)."""
     check_object_faces({p: len(m.faces) for p, m in parts.items()}, PHYSICS_MAX_FACES, "the physics check",
                        flag="`jax3dc physics check --max-faces` on the exported parts")
-    verdict = _plain(check_object(structure, parts, scale))
+    verdict = _plain(check_object(structure, parts, scale, mounted=mounted))
     path = out / "physics.json"
     path.write_text(json.dumps(verdict, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     return path, verdict

@@ -151,12 +151,13 @@ class _Progress:
         self.bar.refresh()
 
 
-def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: float, outputs: _Outputs) -> str:
+def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: float, mounted: bool,
+            outputs: _Outputs) -> str:
     """The candidate the physics verdict prefers; candidates.json holds every one's row and the reason."""
     from eval.verified.select import Candidate, choose
 
     candidates = [Candidate(text, logprob) for text, logprob in replies]
-    choice = choose(candidates, parts.keys(), parts, metres, False, boxes)
+    choice = choose(candidates, parts.keys(), parts, metres, mounted, boxes)
     rows = [{"parsed": r.parsed, "rule": r.rule, "physics_ok": r.ok, "flagged_joints": r.flagged, "logprob": round(r.logprob, 4),
              "text": c.text} for r, c in zip(choice.rows, candidates)]
     doc = {"winner": choice.index, "reason": choice.reason, "candidates": rows}
@@ -164,11 +165,12 @@ def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: 
     return candidates[choice.index].text
 
 
-def _repaired(structure: Structure, parts: dict, boxes: dict, metres: float, outputs: _Outputs) -> Structure:
+def _repaired(structure: Structure, parts: dict, boxes: dict, metres: float, mounted: bool,
+              outputs: _Outputs) -> Structure:
     """``structure`` with flagged hinges repaired where the verdict improves; repairs.json lists them."""
     from eval.verified.repair import repair
 
-    fixed = repair(structure, parts, metres, False, boxes)
+    fixed = repair(structure, parts, metres, mounted, boxes)
     outputs.text("repairs", "repairs.json", json.dumps([r.to_dict() for r in fixed.repairs], indent=1) + "\n")
     return fixed.structure
 
@@ -184,6 +186,7 @@ class _StructureSettings:
     candidates: int
     repair: bool
     scale: float | None
+    mounted: bool
 
 
 def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, code_model_dir: str | Path | None,
@@ -225,7 +228,7 @@ def _stage2(result: PredictResult, rgb: Image.Image, seg: np.ndarray, boxes: dic
         if settings.candidates > 1:
             replies = structure_candidates(generator, rgb, seg_image, settings.max_new_tokens, settings.candidates,
                                            settings.constrained)(result.prompt)
-            result.raw_text = _chosen(replies, parts_in.parts, boxes, metres, outputs)
+            result.raw_text = _chosen(replies, parts_in.parts, boxes, metres, settings.mounted, outputs)
         else:
             generate = structure_model(generator, rgb, seg_image, settings.max_new_tokens, settings.constrained)
     if result.raw_text is None:
@@ -238,7 +241,7 @@ def _stage2(result: PredictResult, rgb: Image.Image, seg: np.ndarray, boxes: dic
     progress.step("exports")
     structure = canonicalize(parsed, boxes)
     if settings.repair:
-        structure = _repaired(structure, parts_in.parts, boxes, metres, outputs)
+        structure = _repaired(structure, parts_in.parts, boxes, metres, settings.mounted, outputs)
     outputs.text("structure", "structure.json", to_json(structure))
     result.structure = structure
     named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
@@ -246,7 +249,7 @@ def _stage2(result: PredictResult, rgb: Image.Image, seg: np.ndarray, boxes: dic
     for name, path in write_exports(named, parts_in.parts, outputs.out, metres).items():
         outputs.wrote(name, path)
     progress.step("physics")
-    path, result.verdict = write_physics(structure, parts_in.parts, outputs.out, metres)
+    path, result.verdict = write_physics(structure, parts_in.parts, outputs.out, metres, settings.mounted)
     outputs.wrote("physics", path)
 
 
@@ -255,7 +258,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
             generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
             dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
-            on_output: OutputListener | None = None, progress: bool = False) -> PredictResult:
+            mounted: bool = False, on_output: OutputListener | None = None, progress: bool = False) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
     ``stage1``: "code", "mesh:FILE" or "parts:DIR" (see eval.predict.stage1). ``structure_model_dir`` / ``code_model_dir``: checkpoint
@@ -270,6 +273,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     answers from one decode (the first greedy), chosen by the physics verdict (candidates.json says
     which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
     (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
+    ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
+    root instead of standing it on a floor (an image gives no category to infer it from).
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
@@ -280,7 +285,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     checkpoints = Checkpoints(dtype)
     steps = _Progress(progress)
     settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
-                                  repair, scale)
+                                  repair, scale, mounted)
     try:
         steps.step("stage 1")
         rgb, image_png, digest, parts_in = _stage1(image, backend, source, code_model_dir, generate_program,

@@ -1,0 +1,28 @@
+"""`predict --mounted`: the physics check holds the root of an object fixed in place in use.
+
+A faucet stood free on a floor falls over; predicted as mounted, its physics.json has no gravity
+failure. The structure model is a stand-in that answers the faucet's own target.
+"""
+
+from __future__ import annotations
+
+import json
+
+from data_pipeline.factories import generate_object
+from eval.physics.verdict import check_object
+from eval.predict import predict
+from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.structure import canonicalize, parse_structure, to_json
+from predict_cases import write_image
+
+
+def test_mounted_prediction_holds_the_root_in_the_physics_check(tmp_path):
+    faucet = generate_object("faucet", 0)
+    save_parts(faucet.parts, tmp_path / "parts")
+    target = to_json(canonicalize(faucet.structure, part_boxes(faucet.parts)))
+    result = predict(write_image(tmp_path / "image.png"), f"parts:{tmp_path / 'parts'}", out=tmp_path / "out",
+                     generate_structure=lambda prompt: target, mounted=True)
+    verdict = json.loads((tmp_path / "out" / "physics.json").read_text())
+    assert verdict == result.verdict and verdict["checks"]["gravity"] == []
+    free = check_object(parse_structure(target, part_ids=faucet.parts), faucet.parts, 1.0)
+    assert any(p.startswith("unstable under gravity") for p in free["checks"]["gravity"]), free["checks"]
