@@ -7,6 +7,7 @@ from pathlib import Path
 
 from eval.predict.models import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.cli import positive_int
+from jax3dc.processing.processor import MAX_IMAGE_PIXELS
 from jax3dc.release import default_structure_model
 
 DESCRIPTION = """\
@@ -50,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
                      scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
                      constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
-                     mounted=args.mounted, on_output=show, progress=True)
+                     mounted=args.mounted, on_output=show, progress=True, max_image_pixels=args.max_image_pixels)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
     held = " with its root held (--mounted)" if args.mounted else ""
@@ -95,4 +96,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "and repairs are judged so (default: not mounted; an image names no category)")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
                    help="model compute dtype (float32 on CPU is slower but exact)")
+    p.add_argument("--max-image-pixels", type=positive_int, default=MAX_IMAGE_PIXELS, metavar="N",
+                   help="refuse an image of more pixels, read from its header before decoding (default: %(default)s)")
     p.set_defaults(func=run)

@@ -40,7 +40,7 @@ from eval.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_m
                                  stage1_from_program)
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
-from jax3dc.processing.processor import load_image, to_rgb
+from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
 from jax3dc.palette import object_palette
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
@@ -71,12 +71,12 @@ class PredictResult:
     verdict: dict | None = None
 
 
-def _image_and_digest(image: str | Path | Image.Image) -> tuple[Image.Image, str]:
+def _image_and_digest(image: str | Path | Image.Image, max_pixels: int) -> tuple[Image.Image, str]:
     if isinstance(image, Image.Image):
         rgb = to_rgb(image)
         return rgb, hashlib.sha256(png_bytes(np.asarray(rgb))).hexdigest()
     path = Path(image)
-    rgb = to_rgb(load_image(path))
+    rgb = to_rgb(load_image(path, max_pixels))
     return rgb, hashlib.sha256(path.read_bytes()).hexdigest()
 
 
@@ -191,10 +191,10 @@ class _StructureSettings:
 
 def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, code_model_dir: str | Path | None,
             generate_program: TextModel | None, max_new_tokens: int, constrained: bool, mesh_up: str,
-            checkpoints: Checkpoints, outputs: _Outputs) -> tuple[Image.Image, bytes, str, Stage1]:
+            checkpoints: Checkpoints, outputs: _Outputs, max_image_pixels: int) -> tuple[Image.Image, bytes, str, Stage1]:
     """I (image.png) and the part meshes (parts/, program.txt for the code backend):
     (I in RGB, its PNG bytes, the sha256 of the input, the parts)."""
-    rgb, digest = _image_and_digest(image)
+    rgb, digest = _image_and_digest(image, max_image_pixels)
     image_png = png_bytes(np.asarray(rgb))  # I as the models saw it (RGB): the viewer shows it
     target = outputs.out / "image.png"
     if isinstance(image, (str, Path)) and Path(image).resolve() == target.resolve():
@@ -258,7 +258,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
             generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
             dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
-            mounted: bool = False, on_output: OutputListener | None = None, progress: bool = False) -> PredictResult:
+            mounted: bool = False, on_output: OutputListener | None = None, progress: bool = False,
+            max_image_pixels: int = MAX_IMAGE_PIXELS) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
     ``stage1``: "code", "mesh:FILE" or "parts:DIR" (see eval.predict.stage1). ``structure_model_dir`` / ``code_model_dir``: checkpoint
@@ -276,6 +277,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
     root instead of standing it on a floor (an image gives no category to infer it from).
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
+    ``max_image_pixels``: a larger image file is refused from its header, before decoding.
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
@@ -289,7 +291,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     try:
         steps.step("stage 1")
         rgb, image_png, digest, parts_in = _stage1(image, backend, source, code_model_dir, generate_program,
-                                                   max_new_tokens, constrained, mesh_up, checkpoints, outputs)
+                                                   max_new_tokens, constrained, mesh_up, checkpoints, outputs,
+                                                   max_image_pixels)
         palette = object_palette(PALETTE_CATEGORY, digest)
         boxes = part_boxes(parts_in.parts)
         camera_given = camera is not None

@@ -19,7 +19,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import warnings
 from dataclasses import dataclass
 from typing import Sequence, Union
 
@@ -145,14 +144,17 @@ MAX_IMAGE_PIXELS = 40_000_000
 def load_image(path: str | os.PathLike, max_pixels: int = MAX_IMAGE_PIXELS) -> Image.Image:
     """Open and fully decode an image file; a missing, corrupt or non-image file, or one of more
     than ``max_pixels`` pixels, is an InputFileError."""
+    pil_cap = Image.MAX_IMAGE_PIXELS
     try:
-        with warnings.catch_warnings():  # our own cap below says it in one line
-            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        Image.MAX_IMAGE_PIXELS = None  # our own cap below, which a user can raise, says it in one line
+        try:
             image = Image.open(path)
+        finally:
+            Image.MAX_IMAGE_PIXELS = pil_cap
         with image:
             if image.width * image.height > max_pixels:
                 raise InputFileError(str(path), f"image of {image.width} x {image.height} pixels; the cap is "
-                                                f"{max_pixels} pixels")
+                                                f"{max_pixels} pixels (raise it with --max-image-pixels)")
             image.load()
             return image.copy()
     except FileNotFoundError as err:
