@@ -26,14 +26,21 @@ MODEL_NAME = "object"
 
 
 def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path, scale: float) -> dict[str, Path]:
-    """object.urdf, object.xml (MJCF), object.usda, object.glb and object_blender.py in ``out``, in metres."""
-    return {
+    """object.urdf, object.usda, object.glb, object_blender.py and object.xml (MJCF) in ``out``, in metres.
+
+    The MJCF is the physics check's model (convex collision pieces), whose cost grows with the
+    triangles: an object over PHYSICS_MAX_FACES is refused after the other exports are written."""
+    files = {
         "urdf": export_urdf(structure, parts, out, scale, model_name=MODEL_NAME),
-        "mjcf": export_mjcf(structure, parts, out, scale, model_name=MODEL_NAME),
         "usd": export_usd(structure, parts, out, scale, model_name=MODEL_NAME),
         "glb": export_gltf(structure, parts, out, scale, model_name=MODEL_NAME),
         "blender": export_blender(structure, parts, out, scale, model_name=MODEL_NAME),
     }
+    check_object_faces({p: len(m.faces) for p, m in parts.items()}, PHYSICS_MAX_FACES,
+                       "the MJCF export and the physics check",
+                       flag="`--max-faces` of `jax3dc export --format mjcf` and `jax3dc physics check` on the parts")
+    files["mjcf"] = export_mjcf(structure, parts, out, scale, model_name=MODEL_NAME)
+    return files
 
 
 def _plain(value):
@@ -52,10 +59,7 @@ def _plain(value):
 def write_physics(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path,
                   scale: float, mounted: bool = False) -> tuple[Path, dict]:
     """physics.json: the plausibility verdict (ok, per-joint reasons, checks) of the object, its root
-    held when ``mounted``; an object over PHYSICS_MAX_FACES triangles is refused before the check
-    (its exports are already written)."""
-    check_object_faces({p: len(m.faces) for p, m in parts.items()}, PHYSICS_MAX_FACES, "the physics check",
-                       flag="`jax3dc physics check --max-faces` on the exported parts")
+    held when ``mounted`` (``write_exports`` has refused an object too large for it)."""
     verdict = _plain(check_object(structure, parts, scale, mounted=mounted))
     path = out / "physics.json"
     path.write_text(json.dumps(verdict, indent=1, sort_keys=True) + "\n", encoding="utf-8")

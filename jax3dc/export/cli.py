@@ -10,7 +10,7 @@ from pathlib import Path
 from jax3dc.cli import positive_int
 from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.export.files import check_file_stem
-from jax3dc.geometry.mesh_size import MAX_PART_FACES
+from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES
 
 FORMATS = ("urdf", "mjcf", "gltf", "usd", "blender")
 
@@ -83,7 +83,10 @@ def _run(args: argparse.Namespace) -> int:
         raise Jax3dcError("--free, --mounted and --actuators are options of --format mjcf")
     base = ""
     if args.format == "mjcf":
+        from jax3dc.geometry.mesh_size import check_object_faces
         from jax3dc.mounted import is_mounted
+        check_object_faces({p: len(m.faces) for p, m in parts.items()}, args.max_faces,
+                           "the MJCF export (its convex collision pieces)")
         category = _category_from_meta(structure_path)
         mounted = is_mounted(category) if args.mounted is None else args.mounted
         path = _exporter(args.format)(structure, parts, args.out, scale, model_name=name, free=args.free,
@@ -110,6 +113,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--parts", required=True, metavar="DIR", help="folder with one mesh per part, named <id>.obj")
     parser.add_argument("--max-part-faces", type=positive_int, default=MAX_PART_FACES, metavar="N",
                         help="refuse a part mesh file of more triangles (default: %(default)s)")
+    parser.add_argument("--max-faces", type=positive_int, default=PHYSICS_MAX_FACES, metavar="N",
+                        help="--format mjcf: refuse an object of more triangles in all; its collision pieces cost "
+                             "time and memory with them, as the physics check's do (default: %(default)s)")
     parser.add_argument("--scale", type=float, metavar="METRES_PER_NU",
                         help="metres per normalised unit (default: 'scale' of meta.json beside FILE.json, else 1)")
     parser.add_argument("--format", required=True, choices=FORMATS,

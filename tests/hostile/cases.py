@@ -327,6 +327,8 @@ def _object_cases(inputs: Path, out: Path) -> list[Case]:
         cases.append(Case("physics check", name, ("physics", "check", str(structure), "--parts", str(parts)), expect))
     cases.append(Case("physics check", "object_faces", ("physics", "check", str(pair), "--parts", str(many_parts)),
                       "--max-faces"))
+    cases.append(Case("export", "object_faces_mjcf", ("export", str(pair), "--parts", str(many_parts), "--format", "mjcf",
+                                                      "--out", str(out / "export_object_faces")), "--max-faces"))
     cases.append(Case("physics check", "part_faces", ("physics", "check", str(pair), "--parts", str(many_parts),
                                                       "--max-part-faces", "1000"), "--max-part-faces"))
     return cases
