@@ -9,7 +9,6 @@ printed (`pytest -s tests/hostile`).
 from __future__ import annotations
 
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -25,10 +24,7 @@ MEMORY_LIMIT_BYTES = 2 << 30
 """Address space of each command (virtual memory: a little above what importing the stack takes)."""
 MIN_CASES = 150
 WORKERS = 2
-
-
-def _limit_address_space() -> None:
-    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT_BYTES, MEMORY_LIMIT_BYTES))
+MEASURED = Path(__file__).with_name("measured.py")
 
 
 def _files(root: Path) -> dict[str, tuple[int, int]]:
@@ -42,33 +38,34 @@ def _files(root: Path) -> dict[str, tuple[int, int]]:
     return found
 
 
-def _wait(pid: int, timeout: float) -> tuple[int | None, int]:
-    """Reap ``pid`` within ``timeout`` seconds (killing it after); its exit code (None on a hang) and its own
-    peak resident memory in bytes. ``os.wait4`` gives this child's usage alone, where ``RUSAGE_CHILDREN``
-    would give the largest of every child this test process ever reaped."""
+def _wait(pid: int, timeout: float) -> int | None:
+    """Reap ``pid`` within ``timeout`` seconds, else kill its whole session; its exit code (None on a hang)."""
     deadline = time.perf_counter() + timeout
     while True:
-        done, status, usage = os.wait4(pid, os.WNOHANG)
+        done, status = os.waitpid(pid, os.WNOHANG)
         if done:
-            return os.waitstatus_to_exitcode(status), usage.ru_maxrss * 1024
+            return os.waitstatus_to_exitcode(status)
         if time.perf_counter() > deadline:
-            os.kill(pid, 9)
-            _, _, usage = os.wait4(pid, 0)
-            return None, usage.ru_maxrss * 1024
+            os.killpg(pid, 9)
+            os.waitpid(pid, 0)
+            return None
         time.sleep(0.02)
 
 
 def _run(case: Case, cwd: Path) -> dict:
     env = {**os.environ, "PYTHONWARNINGS": "default"}  # a warning printed before the error line must show
     start = time.perf_counter()
-    with tempfile.TemporaryFile() as err_file:
-        process = subprocess.Popen([sys.executable, "-m", "jax3dc.cli", *case.argv], cwd=cwd, env=env,
-                                   stdout=subprocess.DEVNULL, stderr=err_file, preexec_fn=_limit_address_space)
-        rc, peak = _wait(process.pid, TIME_LIMIT_S)
-        process.returncode = rc if rc is not None else -9  # reaped here: Popen must not wait on it again
+    with tempfile.TemporaryDirectory() as tmp:
+        err_path, report = Path(tmp) / "stderr", Path(tmp) / "peak"
+        with err_path.open("wb") as err_file:
+            process = subprocess.Popen([sys.executable, str(MEASURED), str(MEMORY_LIMIT_BYTES), str(report), *case.argv],
+                                       cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=err_file,
+                                       start_new_session=True)
+            rc = _wait(process.pid, TIME_LIMIT_S)
+            process.returncode = rc if rc is not None else -9  # reaped here: Popen must not wait on it again
         seconds = time.perf_counter() - start
-        err_file.seek(0)
-        err = err_file.read().decode(errors="replace")
+        err = err_path.read_bytes().decode(errors="replace")
+        peak = int(report.read_text()) if report.exists() else 0
     if rc is None:
         return {"case": case, "hang": True, "seconds": TIME_LIMIT_S, "rc": None, "err": err, "peak": peak}
     return {"case": case, "hang": False, "seconds": seconds, "rc": rc, "err": err, "peak": peak}
