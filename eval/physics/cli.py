@@ -100,7 +100,7 @@ def run_check(args: argparse.Namespace) -> int:
     except OSError as e:
         raise InputFileError(args.structure, f"cannot read: {e.strerror or e}") from None
     parts = load_parts(args.parts, args.max_part_faces)
-    check_object_faces({p: len(m.faces) for p, m in parts.items()}, args.max_faces, "the physics check")
+    check_object_faces(parts, args.max_faces, "the physics check")
     structure = parse_structure(text, part_ids=parts.keys())
     scale = _checked_scale(args.scale if args.scale is not None else _scale_beside(args.structure), args.structure)
     verdict = check_object(structure, parts, scale, backend=args.backend, mounted=args.mounted)

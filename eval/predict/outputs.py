@@ -36,7 +36,7 @@ def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: 
         "glb": export_gltf(structure, parts, out, scale, model_name=MODEL_NAME),
         "blender": export_blender(structure, parts, out, scale, model_name=MODEL_NAME),
     }
-    check_object_faces({p: len(m.faces) for p, m in parts.items()}, PHYSICS_MAX_FACES,
+    check_object_faces(parts, PHYSICS_MAX_FACES,
                        "the MJCF export and the physics check",
                        flag="`--max-faces` of `jax3dc export --format mjcf` and `jax3dc physics check` on the parts")
     files["mjcf"] = export_mjcf(structure, parts, out, scale, model_name=MODEL_NAME)

@@ -85,8 +85,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.format == "mjcf":
         from jax3dc.geometry.mesh_size import check_object_faces
         from jax3dc.mounted import is_mounted
-        check_object_faces({p: len(m.faces) for p, m in parts.items()}, args.max_faces,
-                           "the MJCF export (its convex collision pieces)")
+        check_object_faces(parts, args.max_faces, "the MJCF export (its convex collision pieces)")
         category = _category_from_meta(structure_path)
         mounted = is_mounted(category) if args.mounted is None else args.mounted
         path = _exporter(args.format)(structure, parts, args.out, scale, model_name=name, free=args.free,

@@ -11,7 +11,9 @@ from __future__ import annotations
 import json
 import re
 import struct
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from jax3dc.errors import Jax3dcError
 
@@ -28,8 +30,10 @@ MAX_COORDINATE = 1e12
 _CHUNK = 1 << 24
 
 
-def check_object_faces(faces_per_part: dict[int, int], cap: int, task: str, flag: str = "--max-faces") -> None:
-    """Refuse, in one line naming the cap and how to raise it, an object over ``cap`` triangles."""
+def check_object_faces(parts: Mapping[int, Any], cap: int, task: str, flag: str = "--max-faces") -> None:
+    """Refuse, in one line naming the cap and how to raise it, an object whose part meshes (anything
+    with ``faces``) hold more than ``cap`` triangles."""
+    faces_per_part = {part_id: len(mesh.faces) for part_id, mesh in parts.items()}
     total = sum(faces_per_part.values())
     if total > cap:
         largest = max(faces_per_part, key=faces_per_part.get)

@@ -138,6 +138,7 @@ def test_face_caps_refuse_above_and_accept_at_the_cap(tmp_path):
     assert set(load_parts(tmp_path, max_faces=12)) == {1, 2}
     with pytest.raises(InputFileError, match="at most 11 .*--max-part-faces"):
         load_parts(tmp_path, max_faces=11)
-    check_object_faces({1: 12, 2: 12}, 24, "the check")
+    boxes = {1: trimesh.creation.box(), 2: trimesh.creation.box()}
+    check_object_faces(boxes, 24, "the check")
     with pytest.raises(Jax3dcError, match=r"24 triangles \(part 1: 12\); the check takes at most 23 \(raise it with --max-faces\)"):
-        check_object_faces({1: 12, 2: 12}, 23, "the check")
+        check_object_faces(boxes, 23, "the check")
