@@ -7,8 +7,15 @@ component whose hull is much larger than its volume is cut by voxels: its filled
 covered greedily by boxes, and each piece is the hull of the surface points inside one box
 (``DECOMPOSITION_DEPTH`` sets the voxel size: 8·2^depth across). Each piece's hull is capped at
 ``HULL_MAX_VERTICES`` by farthest-point sampling of the hull's vertices, which keeps the extreme
-points. The exported MJCF (``jax3dc.export.simulation``) and the physics checks collide through
-these pieces.
+points. The exported MJCF (``jax3dc.export.simulation``), the URDF and USD exports and the physics
+checks collide through these pieces.
+
+The decomposition costs up to about a second per concave part, and every export and check of the same object asks
+for it again (``predict`` writes three exports and runs the physics check on the same parts), so
+``convex_pieces`` keeps the pieces of the last ``CACHE_ENTRIES`` meshes in the process, keyed by
+a digest of the vertices, faces, arguments and decomposition constants: a hit returns the very
+arrays a fresh decomposition gave (read-only, since every caller shares them), so no export or
+verdict can differ from an uncached run. ``decompose`` is the uncached computation.
 
 CoACD (``coacd`` 1.0.14 on PyPI, default threshold 0.05) was measured against this on the physics
 ground-truth bench (``bench/physics_ground_truth.py --seeds 1``: the 40 factory categories and the
@@ -36,6 +43,10 @@ against 11 s).
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
+
 import numpy as np
 import trimesh
 
@@ -44,9 +55,50 @@ CONCAVE_EXCESS_NU3 = 2e-4  # a closed piece whose hull exceeds its volume by thi
 DECOMPOSITION_DEPTH = 2  # voxel size of a concave component: its largest extent / (8 * 2**depth)
 MAX_PIECES_PER_PART = 128  # beyond this the part is decomposed as one component (tiny pieces merge)
 MAX_BOXES_PER_COMPONENT = 128  # the voxels of a concave component coarsen until this many boxes cover it
+CACHE_ENTRIES = 256  # meshes whose pieces stay in memory (one entry: at most 128 hulls of 32 vertices, 100 kB)
+
+_cache: OrderedDict[bytes, tuple[np.ndarray, ...]] = OrderedDict()
+_cache_lock = threading.Lock()
 
 
 def convex_pieces(mesh: trimesh.Trimesh, min_size: float, scale: float = 1.0) -> list[np.ndarray]:
+    """``decompose(mesh, min_size, scale)``, computed once per mesh and arguments in this process
+    (see the module docstring); the arrays are shared, hence read-only."""
+    key = _cache_key(mesh, min_size, scale)
+    with _cache_lock:
+        hit = _cache.get(key)
+        if hit is not None:
+            _cache.move_to_end(key)
+            return list(hit)
+    pieces = tuple(decompose(mesh, min_size, scale))
+    for vertices in pieces:
+        vertices.setflags(write=False)
+    with _cache_lock:
+        _cache[key] = pieces
+        while len(_cache) > CACHE_ENTRIES:
+            _cache.popitem(last=False)
+    return list(pieces)
+
+
+def clear_cache() -> None:
+    """Forget every cached decomposition (a benchmark times the uncached path this way)."""
+    with _cache_lock:
+        _cache.clear()
+
+
+def _cache_key(mesh: trimesh.Trimesh, min_size: float, scale: float) -> bytes:
+    """Digest of all the pieces depend on: the exact vertices and faces, the arguments and the
+    module's constants (read at call time: a changed constant never returns older pieces)."""
+    digest = hashlib.blake2b(digest_size=32)
+    for array in (np.ascontiguousarray(mesh.vertices, dtype=np.float64), np.ascontiguousarray(mesh.faces, dtype=np.int64)):
+        digest.update(np.asarray(array.shape, dtype=np.int64).tobytes())
+        digest.update(array.tobytes())
+    digest.update(np.asarray([min_size, scale, HULL_MAX_VERTICES, CONCAVE_EXCESS_NU3, DECOMPOSITION_DEPTH,
+                              MAX_PIECES_PER_PART, MAX_BOXES_PER_COMPONENT], dtype=np.float64).tobytes())
+    return digest.digest()
+
+
+def decompose(mesh: trimesh.Trimesh, min_size: float, scale: float = 1.0) -> list[np.ndarray]:
     """Vertex arrays [k, 3] (k ≤ HULL_MAX_VERTICES) of convex pieces covering ``mesh``.
 
     ``min_size``: pieces thinner than this are thickened (so hulls are valid); ``scale``: mesh
