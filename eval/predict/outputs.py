@@ -1,7 +1,8 @@
 """Writing a predicted object: the exports of SPEC §1 and the physics verdict of SPEC §8.
 
 Each writer returns the paths it wrote, so the pipeline can list every output even when a later
-step fails. URDF and MJCF share ``meshes/<id>.obj`` (the same part meshes in the same link frames).
+step fails. URDF and MJCF share ``meshes/<id>.obj`` (the same part meshes in the same link frames);
+the URDF's collision hulls are ``meshes/<id>_collision_<k>.obj``, the MJCF's pieces inline.
 """
 
 from __future__ import annotations
@@ -26,19 +27,19 @@ MODEL_NAME = "object"
 
 
 def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path, scale: float) -> dict[str, Path]:
-    """object.urdf, object.usda, object.glb, object_blender.py and object.xml (MJCF) in ``out``, in metres.
+    """object.glb, object_blender.py, object.urdf, object.usda and object.xml (MJCF) in ``out``, in metres.
 
-    The MJCF is the physics check's model (convex collision pieces), whose cost grows with the
-    triangles: an object over PHYSICS_MAX_FACES is refused after the other exports are written."""
+    URDF, USD and MJCF collide through the physics check's convex pieces (decomposed once, see
+    ``jax3dc.geometry.convex_pieces``), whose cost grows with the triangles: an object over
+    PHYSICS_MAX_FACES is refused after the GLB and the Blender script are written."""
     files = {
-        "urdf": export_urdf(structure, parts, out, scale, model_name=MODEL_NAME),
-        "usd": export_usd(structure, parts, out, scale, model_name=MODEL_NAME),
         "glb": export_gltf(structure, parts, out, scale, model_name=MODEL_NAME),
         "blender": export_blender(structure, parts, out, scale, model_name=MODEL_NAME),
     }
-    check_object_faces(parts, PHYSICS_MAX_FACES,
-                       "the MJCF export and the physics check",
-                       flag="`--max-faces` of `jax3dc export --format mjcf` and `jax3dc physics check` on the parts")
+    check_object_faces(parts, PHYSICS_MAX_FACES, "the URDF, USD and MJCF exports and the physics check",
+                       flag="`--max-faces` of `jax3dc export` and `jax3dc physics check` on the parts")
+    files["urdf"] = export_urdf(structure, parts, out, scale, model_name=MODEL_NAME)
+    files["usd"] = export_usd(structure, parts, out, scale, model_name=MODEL_NAME)
     files["mjcf"] = export_mjcf(structure, parts, out, scale, model_name=MODEL_NAME)
     return files
 

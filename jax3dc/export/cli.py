@@ -13,6 +13,7 @@ from jax3dc.export.files import check_file_stem
 from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES
 
 FORMATS = ("urdf", "mjcf", "gltf", "usd", "blender")
+PIECE_FORMATS = ("urdf", "mjcf", "usd")  # they collide through the parts' convex pieces, whose cost --max-faces caps
 
 
 def _exporter(fmt: str):
@@ -82,10 +83,11 @@ def _run(args: argparse.Namespace) -> int:
     if args.format != "mjcf" and (args.free or args.actuators or args.mounted is not None):
         raise Jax3dcError("--free, --mounted and --actuators are options of --format mjcf")
     base = ""
-    if args.format == "mjcf":
+    if args.format in PIECE_FORMATS:
         from jax3dc.geometry.mesh_size import check_object_faces
+        check_object_faces(parts, args.max_faces, f"the {args.format.upper()} export (its convex collision pieces)")
+    if args.format == "mjcf":
         from jax3dc.mounted import is_mounted
-        check_object_faces(parts, args.max_faces, "the MJCF export (its convex collision pieces)")
         category = _category_from_meta(structure_path)
         mounted = is_mounted(category) if args.mounted is None else args.mounted
         path = _exporter(args.format)(structure, parts, args.out, scale, model_name=name, free=args.free,
@@ -113,8 +115,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--max-part-faces", type=positive_int, default=MAX_PART_FACES, metavar="N",
                         help="refuse a part mesh file of more triangles (default: %(default)s)")
     parser.add_argument("--max-faces", type=positive_int, default=PHYSICS_MAX_FACES, metavar="N",
-                        help="--format mjcf: refuse an object of more triangles in all; its collision pieces cost "
-                             "time and memory with them, as the physics check's do (default: %(default)s)")
+                        help="--format urdf, mjcf or usd: refuse an object of more triangles in all; its convex "
+                             "collision pieces cost time and memory with them, as the physics check's do "
+                             "(default: %(default)s)")
     parser.add_argument("--scale", type=float, metavar="METRES_PER_NU",
                         help="metres per normalised unit (default: 'scale' of meta.json beside FILE.json, else 1)")
     parser.add_argument("--format", required=True, choices=FORMATS,

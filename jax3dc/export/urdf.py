@@ -3,8 +3,12 @@
 Each link's frame is at its joint pivot (rigid parts share their parent's frame; see
 ``assembly``), so a joint's origin is the pivot relative to the parent link, with no rotation,
 and its axis is the structure's axis. Inertials come from the part's solid (closed mesh, else
-convex hull, else a thin box) × the family density. Meshes are written beside the URDF in
-``meshes/<id>.obj``, already in the link frame and in metres; a flat part collides as a box.
+convex hull, else a thin box) × the family density. Meshes are written beside the URDF, already in
+the link frame and in metres: the part mesh ``meshes/<id>.obj`` is the visual, and the link
+collides through the part's convex pieces, the MJCF's (``jax3dc.geometry.convex_pieces``, at
+least ``MIN_PIECE_M`` thick): one ``<collision>`` per piece, the hull ``meshes/<id>_collision_<k>.obj``,
+so PyBullet, MuJoCo and the MJCF collide alike (a concave carcass is not its hull; a flat part is
+a 2 mm plate).
 A scene with several roots gets a ``scene_root`` base link holding each root by a fixed joint. It
 has an explicit zero-mass inertial, since PyBullet gives a link without one 1 kg where MuJoCo
 gives 0; a massless base is then fixed in PyBullet, as the MJCF fixes its roots to the world.
@@ -20,6 +24,8 @@ import trimesh
 
 from jax3dc.export.assembly import ExportPart, assemble, unit_axis, vec
 from jax3dc.export.files import write_files
+from jax3dc.export.simulation import MIN_PIECE_M
+from jax3dc.geometry.convex_pieces import convex_pieces, hull_mesh
 from jax3dc.geometry.parts import obj_text
 from jax3dc.materials import MATERIALS
 from jax3dc.structure.schema import Structure
@@ -51,7 +57,11 @@ def urdf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
     for part in export:
         file_name = f"{MESH_DIR}/{part.part_id}.obj"
         files[file_name] = obj_text(part.mesh).encode()
-        _add_link(robot, part, file_name)
+        collision_files = []
+        for k, vertices in enumerate(convex_pieces(part.mesh, MIN_PIECE_M, scale)):
+            collision_files.append(f"{MESH_DIR}/{part.part_id}_collision_{k}.obj")
+            files[collision_files[-1]] = obj_text(hull_mesh(vertices)).encode()
+        _add_link(robot, part, file_name, collision_files)
         if part.parent is not None:
             _add_joint(robot, part, labels[part.parent])
         elif len(roots) > 1:
@@ -63,21 +73,17 @@ def urdf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
     return '<?xml version="1.0"?>\n' + ET.tostring(robot, encoding="unicode") + "\n", files
 
 
-def _add_link(robot: ET.Element, part: ExportPart, mesh_file: str) -> None:
+def _add_link(robot: ET.Element, part: ExportPart, mesh_file: str, collision_files: list[str]) -> None:
     link = ET.SubElement(robot, "link", name=part.label)
     _add_inertial(link, part.mass.center_of_mass, part.mass.mass, part.mass.inertia)
     visual = ET.SubElement(link, "visual")
     ET.SubElement(visual, "origin", xyz="0 0 0", rpy="0 0 0")
     ET.SubElement(ET.SubElement(visual, "geometry"), "mesh", filename=mesh_file)
     ET.SubElement(visual, "material", name=f"material_{part.material_id}")
-    collision = ET.SubElement(link, "collision")
-    if part.solid == "box":
-        centre, size = part.box_fallback()
-        ET.SubElement(collision, "origin", xyz=vec(centre), rpy="0 0 0")
-        ET.SubElement(ET.SubElement(collision, "geometry"), "box", size=vec(size))
-    else:
+    for k, file_name in enumerate(collision_files):
+        collision = ET.SubElement(link, "collision", name=f"collision_{part.part_id}_{k}")
         ET.SubElement(collision, "origin", xyz="0 0 0", rpy="0 0 0")
-        ET.SubElement(ET.SubElement(collision, "geometry"), "mesh", filename=mesh_file)
+        ET.SubElement(ET.SubElement(collision, "geometry"), "mesh", filename=file_name)
 
 
 def _add_inertial(link: ET.Element, center_of_mass: np.ndarray, mass: float, inertia: np.ndarray) -> None:

@@ -6,10 +6,11 @@ Each part is an Xform nested as in the structure, at its part frame (see ``assem
 
 * ``RigidBodyAPI`` and ``MassAPI``: the same mass as MJCF and URDF (solid × family density), its
   centre of mass and principal inertia;
-* ``mesh``: the part mesh in the part frame, display colour and opacity of the family. It is the
-  collider (``convexHull`` when convex or open, ``convexDecomposition`` when closed and concave,
-  since dynamic bodies cannot collide as triangle meshes), except for a flat or degenerate part,
-  whose collider is a ``collision`` cube of its bounds at least 1 mm thick, as in MJCF;
+* ``mesh``: the part mesh in the part frame, display colour and opacity of the family (visual only);
+* ``collision_<k>``: the colliders, the part's convex pieces as in the MJCF and the URDF
+  (``jax3dc.geometry.convex_pieces``: a concave carcass is not its hull, a flat part is a 2 mm
+  plate), each a hull mesh with the ``convexHull`` approximation (exact for a convex mesh, and at
+  most 32 vertices, within PhysX's hull limit) and the ``guide`` purpose, so it is not rendered;
 * ``joint_<id>``: revolute (limits in degrees, as UsdPhysics wants) or prismatic (metres) joint
   to the parent body, a fixed joint for a rigid part, and a fixed joint to the world for a root
   (the object stays where it is, as in MJCF and URDF; disable it to let the object move).
@@ -37,6 +38,8 @@ from scipy.spatial.transform import Rotation
 from jax3dc.export.assembly import ExportPart, assemble, unit_axis
 from jax3dc.export.files import write_files
 from jax3dc.export.gltf import relation_extras
+from jax3dc.export.simulation import MIN_PIECE_M
+from jax3dc.geometry.convex_pieces import convex_pieces, hull_mesh
 from jax3dc.materials import MATERIALS
 from jax3dc.structure.schema import Structure
 
@@ -89,35 +92,34 @@ def _physics_materials(stage: Usd.Stage, root: Sdf.Path, structure: Structure) -
     return out
 
 
-def _collider(stage: Usd.Stage, path: Sdf.Path, part: ExportPart, mesh: UsdGeom.Mesh,
-              material: UsdShade.Material) -> None:
-    if part.solid == "box":
-        centre, size = part.box_fallback()
-        cube = UsdGeom.Cube.Define(stage, path.AppendChild("collision"))
-        cube.CreateSizeAttr(1.0)
-        cube.CreatePurposeAttr(UsdGeom.Tokens.guide)
-        cube.AddTranslateOp().Set(Gf.Vec3d(*_clean(centre)))
-        cube.AddScaleOp().Set(Gf.Vec3f(*_clean(size)))
-        prim = cube.GetPrim()
-        UsdPhysics.CollisionAPI.Apply(prim)
-    else:
+def _colliders(stage: Usd.Stage, path: Sdf.Path, part: ExportPart, scale: float,
+               material: UsdShade.Material) -> None:
+    """One ``collision_<k>`` hull per convex piece of the part (the MJCF's collision geoms)."""
+    for k, vertices in enumerate(convex_pieces(part.mesh, MIN_PIECE_M, scale)):
+        hull = hull_mesh(vertices)
+        mesh = _triangles(stage, path.AppendChild(f"collision_{k}"), hull.vertices, hull.faces)
+        mesh.CreatePurposeAttr(UsdGeom.Tokens.guide)
         prim = mesh.GetPrim()
         UsdPhysics.CollisionAPI.Apply(prim)
-        convex = part.solid == "convex hull" or part.mesh.is_convex
-        UsdPhysics.MeshCollisionAPI.Apply(prim).CreateApproximationAttr(
-            UsdPhysics.Tokens.convexHull if convex else UsdPhysics.Tokens.convexDecomposition)
-    UsdShade.MaterialBindingAPI.Apply(prim).Bind(material, UsdShade.Tokens.fallbackStrength, "physics")
+        UsdPhysics.MeshCollisionAPI.Apply(prim).CreateApproximationAttr(UsdPhysics.Tokens.convexHull)
+        UsdShade.MaterialBindingAPI.Apply(prim).Bind(material, UsdShade.Tokens.fallbackStrength, "physics")
+
+
+def _triangles(stage: Usd.Stage, path: Sdf.Path, vertices: np.ndarray, faces: np.ndarray) -> UsdGeom.Mesh:
+    """A Mesh prim of triangles as they are (float32 points, not a subdivision cage)."""
+    mesh = UsdGeom.Mesh.Define(stage, path)
+    points = np.asarray(vertices, dtype=np.float32) + np.float32(0.0)
+    faces = np.asarray(faces, dtype=np.int32)
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, dtype=np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.reshape(-1)))
+    mesh.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.stack([points.min(axis=0), points.max(axis=0)])))
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    return mesh
 
 
 def _mesh(stage: Usd.Stage, path: Sdf.Path, part: ExportPart) -> UsdGeom.Mesh:
-    mesh = UsdGeom.Mesh.Define(stage, path.AppendChild("mesh"))
-    vertices = np.asarray(part.mesh.vertices, dtype=np.float32) + np.float32(0.0)
-    faces = np.asarray(part.mesh.faces, dtype=np.int32)
-    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(vertices))
-    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, dtype=np.int32)))
-    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.reshape(-1)))
-    mesh.CreateExtentAttr(Vt.Vec3fArray.FromNumpy(np.stack([vertices.min(axis=0), vertices.max(axis=0)])))
-    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)  # triangles as they are, not a subdivision cage
+    mesh = _triangles(stage, path.AppendChild("mesh"), part.mesh.vertices, part.mesh.faces)
     mesh.CreateDoubleSidedAttr(True)  # open part meshes are seen from both sides
     r, g, b, a = part.props.rgba
     mesh.CreateDisplayColorAttr(Vt.Vec3fArray([Gf.Vec3f(r, g, b)]))
@@ -197,7 +199,8 @@ def usd_stage(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: fl
         if parent is None:
             UsdPhysics.ArticulationRootAPI.Apply(prim)
         _mass(prim, part)
-        _collider(stage, path, part, _mesh(stage, path, part), materials[part.material_id])
+        _mesh(stage, path, part)
+        _colliders(stage, path, part, scale, materials[part.material_id])
         _joint(stage, path, part, parent)
     scene = UsdPhysics.Scene.Define(stage, SCENE_PATH)
     scene.CreateGravityDirectionAttr(Gf.Vec3f(0.0, 0.0, -1.0))

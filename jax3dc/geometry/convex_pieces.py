@@ -10,12 +10,12 @@ covered greedily by boxes, and each piece is the hull of the surface points insi
 points. The exported MJCF (``jax3dc.export.simulation``), the URDF and USD exports and the physics
 checks collide through these pieces.
 
-The decomposition costs up to about a second per concave part, and every export and check of the same object asks
-for it again (``predict`` writes three exports and runs the physics check on the same parts), so
-``convex_pieces`` keeps the pieces of the last ``CACHE_ENTRIES`` meshes in the process, keyed by
-a digest of the vertices, faces, arguments and decomposition constants: a hit returns the very
-arrays a fresh decomposition gave (read-only, since every caller shares them), so no export or
-verdict can differ from an uncached run. ``decompose`` is the uncached computation.
+The decomposition costs up to about a second per concave part, and every export and check of the
+same object asks for it again (``predict`` writes three exports and runs the physics check on the
+same parts), so ``convex_pieces`` keeps the pieces of the last ``CACHE_ENTRIES`` meshes in the
+process, keyed by a digest of the vertices, faces, arguments and decomposition constants: a hit
+returns the very arrays a fresh decomposition gave (read-only, since every caller shares them), so
+no export or verdict can differ from an uncached run. ``decompose`` is the uncached computation.
 
 CoACD (``coacd`` 1.0.14 on PyPI, default threshold 0.05) was measured against this on the physics
 ground-truth bench (``bench/physics_ground_truth.py --seeds 1``: the 40 factory categories and the
@@ -191,6 +191,12 @@ def capped_hull(points: np.ndarray, min_size: float) -> np.ndarray:
     if len(vertices) > HULL_MAX_VERTICES:
         vertices = vertices[_farthest_points(vertices, HULL_MAX_VERTICES)]
     return vertices
+
+
+def hull_mesh(vertices: np.ndarray) -> trimesh.Trimesh:
+    """The closed, outward-facing triangle hull of a piece's vertices: what the URDF and USD exports
+    write for a piece (MuJoCo builds the same hull from the MJCF's vertex list)."""
+    return trimesh.convex.convex_hull(np.asarray(vertices, dtype=np.float64))
 
 
 def _farthest_points(points: np.ndarray, k: int) -> np.ndarray:

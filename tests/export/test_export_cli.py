@@ -55,6 +55,20 @@ def test_scale_comes_from_meta_json_beside_the_structure(tmp_path):
     np.testing.assert_allclose(data.xanchor[j], np.asarray(structure.nodes[3].joint.pivot) * 2.5, atol=1e-5)
 
 
+@pytest.mark.parametrize("fmt, capped", [("urdf", True), ("usd", True), ("mjcf", True), ("gltf", False)])
+def test_max_faces_caps_the_formats_with_convex_pieces(tmp_path, capsys, fmt, capped):
+    """The cabinet has 5 boxes of 12 triangles and a 2-triangle sticker: 62 in all."""
+    folder = _object_dir(tmp_path)
+    rc = main(["export", str(folder / "structure.json"), "--parts", str(folder / "parts"), "--format", fmt,
+               "--out", str(tmp_path / "out"), "--max-faces", "61"])
+    err = capsys.readouterr().err
+    if capped:
+        assert rc == 1 and f"the {fmt.upper()} export (its convex collision pieces) takes at most 61" in err
+        assert not (tmp_path / "out").exists()
+    else:
+        assert rc == 0 and err == ""
+
+
 @pytest.mark.parametrize("change, message", [
     (lambda f: (f / "parts" / "5.obj").unlink(), "part_ids"),
     (lambda f: (f / "structure.json").write_text("{nodes"), "invalid JSON"),
@@ -86,7 +100,8 @@ def test_separate_processes_write_identical_bytes(tmp_path):
     _export_all(folder, tmp_path / "a", "1")
     _export_all(folder, tmp_path / "b", "2")
     files = sorted(p.relative_to(tmp_path / "a") for p in (tmp_path / "a").rglob("*") if p.is_file())
-    assert len(files) == 5 + 5  # five main files and one mesh per part
+    # five main files, one mesh per part and the URDF's collision hull of each part (a box: one piece)
+    assert len(files) == 5 + 5 + 5 and sum("_collision_" in p.name for p in files) == 5
     for rel in files:
         assert (tmp_path / "a" / rel).read_bytes() == (tmp_path / "b" / rel).read_bytes(), rel
 

@@ -1,6 +1,7 @@
 """USD export read back through OpenUSD's own UsdPhysics loader (what USD simulators build from): the
 structure's bodies and joints (world axis and pivot at rest, limits in degrees or metres), meshes in
-metres, the MJCF's masses, colliders that fit each part, and the same bytes for the same input."""
+metres, the MJCF's masses, the MJCF's convex collision pieces as convex-hull colliders (as many per
+body, each where the MJCF's is and of its extents), and the same bytes for the same input."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from data_pipeline.factories.registry import FACTORIES, generate_object
 from export_cases import CASES, EVIL_NAME, box
 from jax3dc.export.assembly import label_of
 from jax3dc.export.mjcf import mjcf_model
+from jax3dc.export.simulation import MIN_PIECE_M
 from jax3dc.export.usd import export_usd, usd_model
 from jax3dc.materials import MATERIALS
 from jax3dc.structure.schema import Material, Node, Structure
@@ -28,6 +30,8 @@ PARTNET = ("box_rotate_100189", "bucket_swing_100435", "door_8877", "drawer_2045
            "safe_rotate_101593", "switch_100952", "toaster_move_103482", "window_rotate_103135")
 KIND = UsdPhysics.ObjectType
 JOINT_TYPES = {KIND.RevoluteJoint: "hinge", KIND.PrismaticJoint: "slide", KIND.FixedJoint: None}
+# MuJoCo's own hull of a piece can sit 1.8e-6 m inside the written one (PartNet-Mobility's switch)
+ATOL_PIECE_M = 1e-5
 
 
 def _parsed(stage: Usd.Stage) -> dict:
@@ -104,6 +108,12 @@ def _check_export(structure: Structure, parts: dict[int, trimesh.Trimesh], scale
 
     cache = UsdGeom.XformCache()
     model = mujoco.MjModel.from_xml_string(*mjcf_model(structure, parts, scale))
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    colliders: dict[Sdf.Path, list] = {}
+    for desc in found[KIND.MeshShape].values():
+        colliders.setdefault(desc.rigidBody, []).append(desc)
+    assert set(colliders) == set(paths.values()) and not found.get(KIND.CubeShape)
     for pid, node in structure.nodes.items():
         mesh = UsdGeom.Mesh(stage.GetPrimAtPath(paths[pid].AppendChild("mesh")))
         world = np.asarray(cache.GetLocalToWorldTransform(mesh.GetPrim()))  # row vectors: p @ M
@@ -112,6 +122,8 @@ def _check_export(structure: Structure, parts: dict[int, trimesh.Trimesh], scale
         np.testing.assert_allclose(placed, np.asarray(parts[pid].vertices) * scale, atol=1e-6, err_msg=str(pid))
         assert set(mesh.GetFaceVertexCountsAttr().Get()) == {3}
         np.testing.assert_array_equal(mesh.GetFaceVertexIndicesAttr().Get(), np.asarray(parts[pid].faces).reshape(-1))
+        assert not mesh.GetPrim().HasAPI(UsdPhysics.CollisionAPI), pid  # the part mesh is visual only
+        _check_colliders(stage, cache, colliders[paths[pid]], model, data, label_of(pid, node.name))
 
         mass = UsdPhysics.MassAPI(stage.GetPrimAtPath(paths[pid]))
         body = model.body(label_of(pid, node.name))
@@ -124,6 +136,33 @@ def _check_export(structure: Structure, parts: dict[int, trimesh.Trimesh], scale
         w, x, y, z = body.iquat
         mujoco_inertia = _inertia_tensor(body.inertia, Rotation.from_quat([x, y, z, w]))
         np.testing.assert_allclose(usd_inertia, mujoco_inertia, atol=2e-5 * np.max(body.inertia), err_msg=str(pid))
+
+
+def _world_bounds(points: np.ndarray) -> np.ndarray:
+    return np.stack([points.min(axis=0), points.max(axis=0)])
+
+
+def _check_colliders(stage: Usd.Stage, cache: UsdGeom.XformCache, colliders: list, model: mujoco.MjModel,
+                     data: mujoco.MjData, body: str) -> None:
+    """A body's colliders are the MJCF body's collision pieces in order: convex hulls, not rendered,
+    of the same world extents (within ATOL_PIECE_M)."""
+    body_id = model.body(body).id
+    expected = []
+    for g in range(model.ngeom):
+        if model.geom_bodyid[g] == body_id and model.geom(g).name.startswith("collision_"):
+            mesh = model.geom_dataid[g]
+            local = model.mesh_vert[model.mesh_vertadr[mesh]:model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
+            expected.append(_world_bounds(local @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]))
+    by_name = {str(d.primPath.name): d for d in colliders}
+    assert sorted(by_name) == sorted(f"collision_{k}" for k in range(len(expected))), body
+    for k, want in enumerate(expected):
+        desc = by_name[f"collision_{k}"]
+        assert desc.approximation == UsdPhysics.Tokens.convexHull, (body, k)
+        mesh = UsdGeom.Mesh(stage.GetPrimAtPath(desc.primPath))
+        assert mesh.GetPurposeAttr().Get() == UsdGeom.Tokens.guide, (body, k)
+        world = np.asarray(cache.GetLocalToWorldTransform(mesh.GetPrim()))
+        points = np.asarray(mesh.GetPointsAttr().Get(), dtype=float) @ world[:3, :3] + world[3, :3]
+        np.testing.assert_allclose(_world_bounds(points), want, atol=ATOL_PIECE_M, err_msg=f"{body} collision_{k}")
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
@@ -158,9 +197,10 @@ def test_articulations_start_at_each_root_fixed_to_the_world(tmp_path):
         assert len([b for b in art.articulatedBodies if not b.isEmpty]) == roots[root]
 
 
-def test_colliders_fit_the_part_solid(tmp_path):
-    """Convex or open meshes collide as their hull, closed concave ones by decomposition, and a flat
-    part as a box of its bounds at least 1 mm thick (a convex hull of a flat mesh has no volume)."""
+def test_colliders_are_convex_pieces(tmp_path):
+    """A convex or open mesh collides as one hull, a closed concave one as several, and a flat part
+    as a plate MIN_PIECE_M thick (a hull of a flat mesh has no volume); ``_check_export`` compares
+    each with the MJCF."""
     closed = box([0.5, 0.5, 0.5], [0, 0, 0])
     parts = {
         1: closed,
@@ -172,15 +212,19 @@ def test_colliders_fit_the_part_solid(tmp_path):
     nodes = {1: Node(None, 0), 2: Node(1, 0), 3: Node(1, 0), 4: Node(1, 0), 5: Node(1, 1)}
     structure = Structure({0: Material("Metal"), 1: Material("Fabric")}, nodes)
     _check_export(structure, parts, 1.0, tmp_path / "check")
-    found = _parsed(Usd.Stage.Open(str(export_usd(structure, parts, tmp_path, 1.0))))
-    meshes = {str(d.rigidBody): d.approximation for d in found[KIND.MeshShape].values()}
-    assert meshes == {"/object/part_1": "convexHull", "/object/part_1/part_3": "convexHull",
-                      "/object/part_1/part_4": "convexDecomposition"}
-    cubes = {str(d.rigidBody): d for d in found[KIND.CubeShape].values()}
-    assert sorted(cubes) == ["/object/part_1/part_2", "/object/part_1/part_5"]
-    np.testing.assert_allclose(cubes["/object/part_1/part_2"].halfExtents, [0.05, 0.05, 0.0005], rtol=1e-6)
-    np.testing.assert_allclose(cubes["/object/part_1/part_2"].localPos, [0.05, 0.05, 0.3], rtol=1e-6)
-    np.testing.assert_allclose(cubes["/object/part_1/part_5"].halfExtents, [0.0005] * 3, rtol=1e-6)
+    stage = Usd.Stage.Open(str(export_usd(structure, parts, tmp_path, 1.0)))
+    found = _parsed(stage)
+    pieces: dict[str, list[np.ndarray]] = {}
+    for desc in found[KIND.MeshShape].values():
+        points = np.asarray(UsdGeom.Mesh(stage.GetPrimAtPath(desc.primPath)).GetPointsAttr().Get(), dtype=float)
+        pieces.setdefault(str(desc.rigidBody), []).append(points)
+    counts = {body: len(p) for body, p in pieces.items()}
+    assert counts["/object/part_1"] == counts["/object/part_1/part_3"] == counts["/object/part_1/part_2"] == 1
+    assert counts["/object/part_1/part_4"] > 1  # the ring is not its hull
+    (plate,) = pieces["/object/part_1/part_2"]
+    np.testing.assert_allclose(np.ptp(plate, axis=0), [0.1, 0.1, MIN_PIECE_M], rtol=1e-5)
+    (speck,) = pieces["/object/part_1/part_5"]
+    np.testing.assert_allclose(np.ptp(speck, axis=0), [MIN_PIECE_M] * 3, rtol=1e-5)
 
 
 def test_colours_friction_and_gravity_come_from_the_families_and_the_stage(tmp_path):
@@ -188,17 +232,21 @@ def test_colours_friction_and_gravity_come_from_the_families_and_the_stage(tmp_p
     stage = Usd.Stage.Open(str(export_usd(structure, parts, tmp_path, SCALE)))
     found = _parsed(stage)
     materials = found[KIND.RigidBodyMaterial]
-    colliders = {d.rigidBody: d for d in found[KIND.MeshShape].values()}
+    colliders: dict[Sdf.Path, list] = {}
+    for desc in found[KIND.MeshShape].values():
+        colliders.setdefault(desc.rigidBody, []).append(desc)
     for pid, node in structure.nodes.items():
         props = MATERIALS[structure.materials[node.material].family]
         path = _body_path(structure, pid)
         mesh = UsdGeom.Mesh(stage.GetPrimAtPath(path.AppendChild("mesh")))
         np.testing.assert_allclose(mesh.GetDisplayColorAttr().Get()[0], props.rgba[:3], atol=1e-6)
         np.testing.assert_allclose(mesh.GetDisplayOpacityAttr().Get()[0], props.rgba[3], atol=1e-6)
-        (material,) = colliders[path].materials
-        assert materials[material].dynamicFriction == pytest.approx(props.friction)
-        assert materials[material].staticFriction == pytest.approx(props.friction)
-        assert UsdShade.MaterialBindingAPI(mesh.GetPrim()).GetDirectBinding("physics").GetMaterialPath() == material
+        for collider in colliders[path]:
+            (material,) = collider.materials
+            assert materials[material].dynamicFriction == pytest.approx(props.friction)
+            assert materials[material].staticFriction == pytest.approx(props.friction)
+            binding = UsdShade.MaterialBindingAPI(stage.GetPrimAtPath(collider.primPath)).GetDirectBinding("physics")
+            assert binding.GetMaterialPath() == material
     (scene,) = found[KIND.Scene].values()
     assert tuple(scene.gravityDirection) == (0, 0, -1) and scene.gravityMagnitude == pytest.approx(9.81)
     assert stage.GetDefaultPrim().GetPath() == Sdf.Path("/object")

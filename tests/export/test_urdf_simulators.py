@@ -1,6 +1,7 @@
 """The URDF export loads in PyBullet and in yourdfpy with the joints, axes, limits, link tree,
-masses and inertias that the MJCF export has in MuJoCo, and collides as the part's solid (its mesh,
-or the box the MJCF shows for a flat part; the MJCF itself collides through convex pieces).
+masses and inertias that the MJCF export has in MuJoCo, and collides through the MJCF's convex
+pieces: as many collision shapes per link as the MJCF has collision geoms per body, each where the
+MJCF's is and of its extents.
 
 Objects: every factory category, the PartNet-Mobility samples (through the project's importer)
 and the hand-built cases (a flat part that collides as a box, a scene with two roots, a slanted
@@ -25,7 +26,6 @@ from scipy.spatial.transform import Rotation
 from data_pipeline.factories.registry import FACTORIES, generate_object
 from data_pipeline.importers.source import import_object
 from export_cases import CASES
-from jax3dc.export.assembly import MIN_THICKNESS_M
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import SCENE_ROOT, export_urdf
 from jax3dc.structure.schema import Structure
@@ -37,6 +37,9 @@ PARTNET = sorted(p.name for p in PARTNET_MOBILITY.iterdir() if (p / "mobility.ur
 OBJECTS = ([f"factory-{c}" for c in sorted(FACTORIES)] + [f"partnet-{n}" for n in PARTNET]
            + [f"case-{c}" for c in sorted(CASES)])
 ATOL_M = 1e-6  # the exports write 9 significant digits
+# MuJoCo's hull of a piece may drop a vertex that lies within qhull's tolerance of a face, which
+# the written hull keeps: 1.8e-6 m on PartNet-Mobility's switch (a piece thickened to 2 mm)
+ATOL_PIECE_M = 1e-5
 # MuJoCo computes mass properties from float32 mesh vertices: ~2e-6 relative off on thin parts
 RTOL_MUJOCO_MASS = 1e-5
 # yourdfpy's own call into trimesh, when it builds the collision scene
@@ -63,9 +66,9 @@ class Link:
     mass: float
     com: np.ndarray  # world
     inertia: np.ndarray  # [3, 3] about the centre of mass, world axes
-    collision: str | None = None  # "box" or "mesh"
-    box_size: np.ndarray | None = None  # full extents
-    box_centre: np.ndarray | None = None  # world
+    pieces: int = 0  # collision shapes
+    piece_bounds: list[np.ndarray] | None = None  # [2, 3] world bounds of each shape, in order
+    bounds: np.ndarray | None = None  # [2, 3] world bounds of all the link's collision geometry
 
 
 @dataclass
@@ -102,6 +105,10 @@ def _source(name: str) -> tuple[Structure, dict[int, trimesh.Trimesh], float]:
     return structure, parts, CASE_SCALE
 
 
+def _bounds(points: np.ndarray) -> np.ndarray:
+    return np.stack([points.min(axis=0), points.max(axis=0)])
+
+
 def _world_inertia(rotation: np.ndarray, diagonal: np.ndarray) -> np.ndarray:
     return rotation @ np.diag(diagonal) @ rotation.T
 
@@ -122,11 +129,14 @@ def _mujoco(path: Path) -> Summary:
         parent = model.body_parentid[b]
         link = Link(model.body(parent).name if parent else None, model.body_mass[b], data.xipos[b].copy(),
                     _world_inertia(data.ximat[b].reshape(3, 3), model.body_inertia[b]))
-        (geom,) = [g for g in range(model.ngeom) if model.geom_bodyid[g] == b and model.geom(g).name.startswith("visual_")]
-        # the MJCF collides through convex pieces; its visual geom is the part's solid (mesh or flat box)
-        link.collision = "box" if model.geom_type[geom] == int(mujoco.mjtGeom.mjGEOM_BOX) else "mesh"
-        if link.collision == "box":
-            link.box_size, link.box_centre = 2 * model.geom_size[geom], data.geom_xpos[geom].copy()
+        link.piece_bounds = []
+        for g in range(model.ngeom):  # the convex pieces, in the order of their names' k
+            if model.geom_bodyid[g] == b and model.geom(g).name.startswith("collision_"):
+                mesh = model.geom_dataid[g]
+                local = model.mesh_vert[model.mesh_vertadr[mesh]:model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
+                link.piece_bounds.append(_bounds(local @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]))
+        link.pieces = len(link.piece_bounds)
+        link.bounds = _bounds(np.concatenate(link.piece_bounds)) if link.pieces else None
         out.links[model.body(b).name] = link
     return out
 
@@ -158,17 +168,20 @@ def _pybullet(path: Path, client: int) -> Summary:
             position, orientation = poses[i]
             link = Link(parents[i], dynamics[0], np.asarray(position),
                         _world_inertia(Rotation.from_quat(orientation).as_matrix(), dynamics[2]))
-            shapes = pybullet.getCollisionShapeData(body, i, physicsClientId=client)
-            if shapes:
-                assert len(shapes) == 1, name
-                _, _, geometry, size, file_name, local_position, local_orientation = shapes[0]
-                link.collision = {pybullet.GEOM_BOX: "box", pybullet.GEOM_MESH: "mesh"}[geometry]
-                if link.collision == "box":  # the shape's frame is relative to the link's COM frame
-                    link.box_size = np.asarray(size)
-                    link.box_centre = np.asarray(pybullet.multiplyTransforms(
-                        position, orientation, local_position, local_orientation)[0])
-                else:
-                    assert Path(file_name.decode()).is_file(), file_name
+            link.piece_bounds = []
+            for _, _, geometry, _, file_name, local_position, local_orientation in pybullet.getCollisionShapeData(
+                    body, i, physicsClientId=client):
+                assert geometry == pybullet.GEOM_MESH, name
+                # the shape's frame is relative to the link's COM frame; PyBullet collides through the
+                # hull of the file's vertices, so the file placed there is what it collides with
+                place, turn = pybullet.multiplyTransforms(position, orientation, local_position, local_orientation)
+                vertices = np.asarray(trimesh.load(file_name.decode(), process=False).vertices)
+                link.piece_bounds.append(_bounds(vertices @ Rotation.from_quat(turn).as_matrix().T + place))
+            link.pieces = len(link.piece_bounds)
+            link.bounds = _bounds(np.concatenate(link.piece_bounds)) if link.pieces else None
+            # the broad phase agrees: PyBullet's own box of the link holds every piece
+            low, high = pybullet.getAABB(body, i, physicsClientId=client)
+            assert link.bounds is None or (np.all(low <= link.bounds[0]) and np.all(high >= link.bounds[1])), name
             out.links[name] = link
         return out
     finally:
@@ -176,11 +189,18 @@ def _pybullet(path: Path, client: int) -> Summary:
 
 
 def _yourdfpy(path: Path) -> Summary:
-    """Only the collision scene is built: it is what a simulator reads, and it places every link."""
+    """Only the collision scene is built: it is what a simulator reads, and it places every link
+    (yourdfpy joins a link's collision meshes into one, so only the link's bounds are compared)."""
     urdf = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False,
                               build_collision_scene_graph=True, load_collision_meshes=True)
     assert urdf.validate()
-    out = Summary(bounds=np.asarray(urdf.collision_scene.bounds))
+    scene = urdf.collision_scene
+    out = Summary(bounds=np.asarray(scene.bounds))
+    link_bounds = {}
+    for node in scene.graph.nodes_geometry:
+        transform, geometry = scene.graph.get(node)
+        vertices = np.asarray(scene.geometry[geometry].vertices)
+        link_bounds[scene.graph.transforms.parents[node]] = _bounds(vertices @ transform[:3, :3].T + transform[:3, 3])
 
     def pose(link: str) -> np.ndarray:
         return urdf.get_transform(link, collision_geometry=True)
@@ -198,12 +218,8 @@ def _yourdfpy(path: Path) -> Summary:
         frame = pose(link.name) @ link.inertial.origin
         entry = Link(parents.get(link.name), link.inertial.mass, frame[:3, 3],
                      frame[:3, :3] @ link.inertial.inertia @ frame[:3, :3].T)
-        if link.collisions:
-            (collision,) = link.collisions
-            entry.collision = "box" if collision.geometry.box is not None else "mesh"
-            if entry.collision == "box":
-                entry.box_size = np.asarray(collision.geometry.box.size)
-                entry.box_centre = (pose(link.name) @ collision.origin)[:3, 3]
+        entry.pieces = len(link.collisions)
+        entry.bounds = link_bounds.get(link.name)
         out.links[link.name] = entry
     return out
 
@@ -275,20 +291,23 @@ def test_masses_and_inertias_agree_with_mujoco(loaded: Loaded) -> None:
                                        err_msg=f"{loader} {name} inertia")
 
 
-def test_collision_shapes_agree_with_mujoco(loaded: Loaded) -> None:
-    """Flat parts collide as the box the MJCF shows them as; every other part as its mesh, found beside the URDF."""
+def test_collision_pieces_agree_with_mujoco(loaded: Loaded) -> None:
+    """Each link collides through the MJCF body's convex pieces: as many shapes, each where the
+    MJCF's is and of its extents (PyBullet), and the same bounds per link (yourdfpy)."""
     for loader, summary in _urdf_views(loaded).items():
         for name, want in loaded.mujoco.links.items():
             got = summary.links[name]
-            assert got.collision == want.collision, (loader, name)
-            if want.collision == "box":
-                np.testing.assert_allclose(got.box_size, want.box_size, atol=ATOL_M, err_msg=f"{loader} {name}")
-                np.testing.assert_allclose(got.box_centre, want.box_centre, atol=ATOL_M, err_msg=f"{loader} {name}")
+            assert got.pieces == want.pieces > 0, (loader, name)
+            np.testing.assert_allclose(got.bounds, want.bounds, atol=ATOL_PIECE_M, err_msg=f"{loader} {name}")
+            if got.piece_bounds is not None:
+                np.testing.assert_allclose(np.stack(got.piece_bounds), np.stack(want.piece_bounds), atol=ATOL_PIECE_M,
+                                           err_msg=f"{loader} {name}")
+    if SCENE_ROOT in loaded.pybullet.links:
+        assert loaded.pybullet.links[SCENE_ROOT].pieces == loaded.yourdfpy.links[SCENE_ROOT].pieces == 0
 
 
-def test_yourdfpy_collision_geometry_covers_the_parts(loaded: Loaded) -> None:
-    """The collision meshes load and sit where the parts are (flat parts thickened to 1 mm)."""
-    vertices = np.concatenate([np.asarray(mesh.vertices) for mesh in loaded.parts.values()]) * loaded.scale
-    expected = np.stack([vertices.min(axis=0), vertices.max(axis=0)])
-    np.testing.assert_allclose(loaded.yourdfpy.bounds, expected, atol=MIN_THICKNESS_M / 2 + ATOL_M)
+def test_yourdfpy_collision_scene_is_the_mujoco_pieces(loaded: Loaded) -> None:
+    """The whole collision scene loads and spans what the MJCF's pieces span."""
+    pieces = np.concatenate([link.bounds for link in loaded.mujoco.links.values()])
+    np.testing.assert_allclose(loaded.yourdfpy.bounds, _bounds(pieces), atol=ATOL_PIECE_M)
 
