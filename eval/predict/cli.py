@@ -22,7 +22,8 @@ parts are centred with largest extent 1 (the normalised frame). The segmentation
 from the image's camera (--camera), and the structure model (--structure-model) reads the image,
 S and the part legend and writes the structure.
 
-Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF),
+Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF: the
+model the physics check judges, its root free unless --mounted),
 object.usda, object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
 with a slider per joint; open it again with `jax3dc view DIR`) (and program.txt for the code backend,
 structure_raw.txt when the model's JSON is invalid), prompt.txt (the structure model's prompt).
@@ -92,8 +93,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    "kept only when the verdict improves; repairs.json lists them")
     p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=False,
                    help="the object is fixed in place in use (a faucet, a toilet, a door or window frame): the "
-                        "physics check holds its root instead of standing it free on a floor, and the candidates "
-                        "and repairs are judged so (default: not mounted; an image names no category)")
+                        "physics check holds its root instead of standing it free on a floor, the candidates "
+                        "and repairs are judged so, and object.xml keeps its base fixed (without it, its root "
+                        "is free, as in the check; default: not mounted; an image names no category)")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
                    help="model compute dtype (float32 on CPU is slower but exact)")
     p.add_argument("--max-image-pixels", type=positive_int, default=MAX_IMAGE_PIXELS, metavar="N",

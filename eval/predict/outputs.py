@@ -26,8 +26,13 @@ from jax3dc.viewer import ViewerInputs, write_viewer
 MODEL_NAME = "object"
 
 
-def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path, scale: float) -> dict[str, Path]:
+def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path, scale: float,
+                  mounted: bool = False) -> dict[str, Path]:
     """object.glb, object_blender.py, object.urdf, object.usda and object.xml (MJCF) in ``out``, in metres.
+
+    object.xml is the model the physics check (``write_physics`` with the same ``mounted``) judges:
+    its root is free, as the check stands the object on a floor, unless ``mounted``, whose base
+    stays fixed, as the check holds it.
 
     URDF, USD and MJCF collide through the physics check's convex pieces (decomposed once, see
     ``jax3dc.geometry.convex_pieces``), whose cost grows with the triangles: an object over
@@ -40,7 +45,7 @@ def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: 
                        flag="`--max-faces` of `jax3dc export` and `jax3dc physics check` on the parts")
     files["urdf"] = export_urdf(structure, parts, out, scale, model_name=MODEL_NAME)
     files["usd"] = export_usd(structure, parts, out, scale, model_name=MODEL_NAME)
-    files["mjcf"] = export_mjcf(structure, parts, out, scale, model_name=MODEL_NAME)
+    files["mjcf"] = export_mjcf(structure, parts, out, scale, model_name=MODEL_NAME, free=True, mounted=mounted)
     return files
 
 

@@ -246,7 +246,7 @@ def _stage2(result: PredictResult, rgb: Image.Image, seg: np.ndarray, boxes: dic
     result.structure = structure
     named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
                                       for pid, n in structure.nodes.items()})
-    for name, path in write_exports(named, parts_in.parts, outputs.out, metres).items():
+    for name, path in write_exports(named, parts_in.parts, outputs.out, metres, settings.mounted).items():
         outputs.wrote(name, path)
     progress.step("physics")
     path, result.verdict = write_physics(structure, parts_in.parts, outputs.out, metres, settings.mounted)
@@ -275,7 +275,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
     (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
     ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
-    root instead of standing it on a floor (an image gives no category to infer it from).
+    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free (an
+    image gives no category to infer it from).
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
     ``max_image_pixels``: a larger image file is refused from its header, before decoding.
     Raises a Jax3dcError subclass on bad input, after writing every output it could.

@@ -1,12 +1,16 @@
-"""`predict --mounted`: the physics check holds the root of an object fixed in place in use.
+"""`predict --mounted`: the physics check holds the root of an object fixed in place in use, and
+object.xml, the model it judges, keeps its base fixed.
 
 A faucet stood free on a floor falls over; predicted as mounted, its physics.json has no gravity
-failure. The structure model is a stand-in that answers the faucet's own target.
+failure and its object.xml no free joint. The structure model is a stand-in that answers the
+faucet's own target. (Without --mounted, object.xml's root is free: test_predict_output_path.)
 """
 
 from __future__ import annotations
 
 import json
+
+import mujoco
 
 from data_pipeline.factories import generate_object
 from eval.physics.verdict import check_object
@@ -24,5 +28,8 @@ def test_mounted_prediction_holds_the_root_in_the_physics_check(tmp_path):
                      generate_structure=lambda prompt: target, mounted=True)
     verdict = json.loads((tmp_path / "out" / "physics.json").read_text())
     assert verdict == result.verdict and verdict["checks"]["gravity"] == []
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "object.xml"))
+    assert model.njnt == len(faucet.structure.joints()) > 0
+    assert mujoco.mjtJoint.mjJNT_FREE not in set(model.jnt_type)
     free = check_object(parse_structure(target, part_ids=faucet.parts), faucet.parts, 1.0)
     assert any(p.startswith("unstable under gravity") for p in free["checks"]["gravity"]), free["checks"]

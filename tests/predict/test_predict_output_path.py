@@ -45,9 +45,9 @@ def test_predict_output_path_every_output_loads(mesh_run):
     assert to_json(structure) == target_json() == (out / "structure.json").read_text()
     joints = len(structure.joints())
     assert joints >= 1
-    for name in ("object.xml", "object.urdf"):
-        model = mujoco.MjModel.from_xml_path(str(out / name))
-        assert model.njnt == joints, name
+    assert mujoco.MjModel.from_xml_path(str(out / "object.urdf")).njnt == joints
+    model = mujoco.MjModel.from_xml_path(str(out / "object.xml"))  # the checked model: free on a floor, not mounted
+    assert model.njnt == joints + 1 and list(model.jnt_type).count(mujoco.mjtJoint.mjJNT_FREE) == 1
     scene = trimesh.load(str(out / "object.glb"), force="scene")
     assert len(scene.graph.nodes_geometry) >= len(obj.parts)
     assert "import bpy" in (out / "object_blender.py").read_text()
@@ -83,7 +83,7 @@ def test_code_backend_runs_the_program_into_named_parts(tmp_path):
     assert (tmp_path / "out" / "program.txt").read_text() == obj.program_text
     assert result.stage1.names == obj.names
     assert sorted(result.stage1.parts) == sorted(obj.parts)
-    assert mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "object.xml")).njnt == len(obj.structure.joints())
+    assert mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "object.xml")).njnt == len(obj.structure.joints()) + 1  # + free root
     assert np.unique(png_array((tmp_path / "out" / "seg.png").read_bytes()).reshape(-1, 3), axis=0).shape[0] >= 3
 
 
