@@ -22,12 +22,14 @@ from jax3dc.errors import InputFileError
 from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES
 
 VERDICT_HELP = (
-    'The verdict is JSON: {"ok": bool, "joints": {"<part id>": {"ok": bool, "reasons": [...]}}, '
-    '"checks": {"rest": [...], "combinations": [...], "gravity": [...]}}. Reasons are short strings such as '
-    '"penetrates part 3 at q=1.200", "detached from parent at q=0.400", "pivot detached", '
-    '"limit unreachable: hi (stops at q=0.9)", "disagrees with part 5 (symmetric): ..." (its mirror twin '
-    'moves otherwise), "unstable under gravity: ..."; joint values are radians '
-    "(hinge) or normalised units (slide). Tolerances: eval/physics/tolerances.py."
+    'The verdict is JSON: {"ok": bool, "joints": {"<part id>": {"ok": bool, "reasons": [...], "warnings": [...]}}, '
+    '"checks": {"rest": [...], "combinations": [...], "gravity": [...]}, "findings": [...]}. Reasons (failures) '
+    'and warnings are short strings such as "penetrates part 3 at q=1.200", "detached from parent at q=0.400", '
+    '"pivot detached", "limit unreachable: hi (stops at q=0.9)", "disagrees with part 5 (symmetric): ..." (its '
+    'mirror twin moves otherwise), "unstable under gravity: ..."; a limit a little past where the joint stops is '
+    'the warning "limit past contact: hi (stops at q=2.772)". "findings" holds the same as data: check, severity, '
+    'joints, parts, depth (nu), state ([[joint, value], ...]), reachable. Only failures fail a joint or the object. '
+    "Joint values are radians (hinge) or normalised units (slide). Tolerances: eval/physics/tolerances.py."
 )
 
 

@@ -17,10 +17,12 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from eval.physics import cpu_backend
+from eval.physics.findings import FAILURE, WARNING, Finding
 from eval.physics.sim_model import SimModel, SimOptions, build_sim_model
 from eval.physics.states import StateBatch
-from eval.physics.tolerances import (GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT, GRAVITY_TILT_RAD, LIMIT_TOL_HINGE_RAD,
-                                     LIMIT_TOL_SLIDE_NU, REACH_CANDIDATE_NU)
+from eval.physics.tolerances import (GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT, GRAVITY_TILT_RAD, LIMIT_PAST_CONTACT_HINGE_RAD,
+                                     LIMIT_PAST_CONTACT_SLIDE_FRACTION, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU,
+                                     REACH_CANDIDATE_NU)
 from jax3dc.structure.schema import Structure
 
 SETTLE_STEPS = 400  # 0.8 s at the model's 2 ms step
@@ -30,8 +32,10 @@ Rollout = Callable[[mujoco.MjModel, np.ndarray, np.ndarray, int], np.ndarray]  #
 
 def reachability(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float,
                  exclude: frozenset[tuple[int, int]], pieces,
-                 rollout: Rollout = cpu_backend.final_qpos) -> dict[int, list[str]]:
-    """Per jointed part: "limit unreachable: lo|hi (stops at q=V)" when its servo cannot get there."""
+                 rollout: Rollout = cpu_backend.final_qpos) -> list[Finding]:
+    """A "limit" finding per joint end its servo does not get to within LIMIT_TOL_*: a warning with
+    the reachable value when the limit runs at most LIMIT_PAST_CONTACT_* past where the joint stops
+    (real data's limits run a little past a contact), a failure beyond that."""
     sim = reachability_model(structure, parts, scale, exclude, pieces)
     rest = sim.model.qpos0
     targets, rows = [], []
@@ -42,17 +46,21 @@ def reachability(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
             targets.append(ctrl)
             rows.append((k, end))
     if not rows:
-        return {}
+        return []
     final = rollout(sim.model, np.repeat(rest[None], len(rows), axis=0), np.asarray(targets), SETTLE_STEPS)
-    reasons: dict[int, list[str]] = {p: [] for p in sim.joint_parts}
+    found = []
     for (k, end), q in zip(rows, final):
-        unit = 1.0 if sim.joint_type[k] == "hinge" else scale
-        tol = LIMIT_TOL_HINGE_RAD if sim.joint_type[k] == "hinge" else LIMIT_TOL_SLIDE_NU * scale
+        hinge = sim.joint_type[k] == "hinge"
+        unit = 1.0 if hinge else scale
+        tol = LIMIT_TOL_HINGE_RAD if hinge else LIMIT_TOL_SLIDE_NU * scale
+        travel = abs(sim.joint_range[k, 1] - sim.joint_range[k, 0])
+        past = LIMIT_PAST_CONTACT_HINGE_RAD if hinge else LIMIT_PAST_CONTACT_SLIDE_FRACTION * travel
         reached = q[sim.joint_qpos[k]]
-        if abs(reached - sim.joint_range[k, end]) > tol:
-            reasons[sim.joint_parts[k]].append(
-                f"limit unreachable: {('lo', 'hi')[end]} (stops at q={reached / unit:.3f})")
-    return reasons
+        short = abs(reached - sim.joint_range[k, end])
+        if short > tol:
+            found.append(Finding("limit", WARNING if short <= past else FAILURE, joints=(sim.joint_parts[k],),
+                                 reachable=float(reached / unit), limit=("lo", "hi")[end]))
+    return found
 
 
 def reachability_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float,
@@ -115,9 +123,9 @@ def _reach_radius(sim: SimModel, k: int, data: mujoco.MjData) -> float:
 
 
 def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, pieces,
-            rollout: Rollout = cpu_backend.final_qpos, mounted: bool = False) -> tuple[list[str], dict[int, list[str]]]:
-    """Object-level "unstable under gravity ..." and per-joint "sags under gravity" on a floor, joints
-    held (not for full-turn hinges: a wheel or dial turned is still a pose the object has).
+            rollout: Rollout = cpu_backend.final_qpos, mounted: bool = False) -> list[Finding]:
+    """Object-level "gravity" (shown "unstable under gravity ...") and per-joint "sag" findings on a
+    floor, joints held (not for full-turn hinges: a wheel or dial turned is still a pose the object has).
 
     Parts touch only the floor here: the object's own contacts are the kinematic checks' concern.
     A ``mounted`` object (a faucet on its sink, a toilet bolted down) keeps its root fixed: only
@@ -128,7 +136,7 @@ def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: floa
     model = sim.model
     rest = model.qpos0.copy()
     final = rollout(model, rest[None], rest[sim.joint_qpos][None], SETTLE_STEPS)[0]
-    problems: list[str] = []
+    found: list[Finding] = []
     for j in range(model.njnt):
         if int(model.jnt_type[j]) != int(mujoco.mjtJoint.mjJNT_FREE):
             continue
@@ -136,16 +144,15 @@ def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: floa
         drift = float(np.linalg.norm(final[adr:adr + 3] - rest[adr:adr + 3])) / scale
         tilt = _tilt(final[adr + 3:adr + 7])
         if not np.isfinite(drift) or drift > GRAVITY_DRIFT_NU or tilt > GRAVITY_TILT_RAD:
-            problems.append(f"unstable under gravity: root moved {drift:.3f} nu, tilted {tilt:.2f} rad")
-    sag: dict[int, list[str]] = {p: [] for p in sim.joint_parts}
+            found.append(Finding("gravity", depth=drift, tilt=tilt))
     for k, part in enumerate(sim.joint_parts):
         if _full_turn(sim, k):  # every angle is a pose of the object (a wheel rolled by settling: C 0.196 rad, MJX 0.201)
             continue
         unit = 1.0 if sim.joint_type[k] == "hinge" else scale
         moved = abs(final[sim.joint_qpos[k]] - rest[sim.joint_qpos[k]]) / unit
         if not np.isfinite(moved) or moved > GRAVITY_JOINT_DRIFT:
-            sag[part].append(f"sags under gravity by {moved:.3f}")
-    return problems, sag
+            found.append(Finding("sag", joints=(part,), depth=float(moved)))
+    return found
 
 
 def _full_turn(sim: SimModel, k: int) -> bool:

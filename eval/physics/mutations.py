@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from eval.physics.relations import REASON as RELATION
+from eval.physics.findings import RELATION_REASON as RELATION
 from jax3dc.structure.schema import Joint, Structure
 
 PIVOT_SHIFT_NU = 0.25  # how far "pivot moved" moves the pivot off the part boundary
@@ -37,7 +37,7 @@ def mutations_of(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> lis
         if joint is None:
             continue
         axis = np.asarray(joint.axis, dtype=np.float64)
-        motion = ("penetrates", "detached", "limit unreachable", RELATION)
+        motion = ("penetrates", "detached", "limit unreachable", "limit past contact", RELATION)
         out.append(Mutation("flipped axis", part, _with_joint(structure, part, dataclasses.replace(
             joint, axis=tuple(-axis))), motion))
         out.append(Mutation("range doubled", part, _with_joint(structure, part, dataclasses.replace(

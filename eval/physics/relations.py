@@ -20,17 +20,16 @@ import dataclasses
 import numpy as np
 import trimesh
 
+from eval.physics.findings import Finding
 from eval.physics.kinematics import same_line, subtree_points, sweep_distance, symmetric_about
 from eval.physics.tolerances import RELATION_FIT_NU, RELATION_MOTION_TOL_NU
 from jax3dc.structure.schema import Joint, Relation, Structure
 
-REASON = "disagrees with part"  # how each reason of this check starts
-
-
-def relation_disagreements(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> dict[int, list[str]]:
-    """Per jointed part: "disagrees with part B (symmetric|instance): ..." for each related part
-    whose articulation is not this one's image under the relation's map."""
-    out: dict[int, list[str]] = {}
+def relation_disagreements(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> list[Finding]:
+    """A finding ("relation parents|joint type|motion", shown as "disagrees with part B
+    (symmetric|instance): ...") per jointed part of each related pair whose articulations are not
+    each other's image under the relation's map."""
+    out: list[Finding] = []
     for relation in structure.relations:
         if relation.type not in ("symmetric", "instance"):
             continue
@@ -45,7 +44,8 @@ def relation_disagreements(structure: Structure, parts: dict[int, trimesh.Trimes
             continue
         for this, other in ((a, b), (b, a)):
             if structure.nodes[this].joint is not None:
-                out.setdefault(this, []).append(f"{REASON} {other} ({relation.type}): {problem}")
+                out.append(dataclasses.replace(problem, joints=(this,), parts=(other,) + problem.parts,
+                                               relation=relation.type))
     return out
 
 
@@ -89,21 +89,22 @@ def _maps(a: trimesh.Trimesh, b: trimesh.Trimesh) -> list[_Map]:
 
 
 def _disagreement(structure: Structure, parts: dict[int, trimesh.Trimesh], relation: Relation,
-                  maps: list[_Map]) -> str | None:
+                  maps: list[_Map]) -> Finding | None:
+    """What differs, as a finding without its joint and related part (the caller adds them)."""
     a, b = structure.nodes[relation.a], structure.nodes[relation.b]
     if a.joint is None or b.joint is None:
         return None
     if a.parent != b.parent and not _related(structure, a.parent, b.parent):
-        return f"their parents {a.parent} and {b.parent} differ and are not related"
+        return Finding("relation parents", parts=(a.parent, b.parent))
     if a.joint.type != b.joint.type:
-        return f"a {b.joint.type} where the other is a {a.joint.type}"
+        return Finding("relation joint type", joint_types=(a.joint.type, b.joint.type))
     points = subtree_points(structure, parts, relation.b)
     if b.joint.type == "hinge" and symmetric_about(points, b.joint) and any(
             same_line(m.joint(a.joint), b.joint, RELATION_MOTION_TOL_NU) for m in maps):
         return None  # a round part turned about its own axis: any range occupies the same space
     gap = min(sweep_distance(m.joint(a.joint), b.joint, points) for m in maps)
     if gap > RELATION_MOTION_TOL_NU:
-        return f"they move differently ({gap:.3f} nu apart once mapped onto each other)"
+        return Finding("relation motion", depth=float(gap))
     return None
 
 

@@ -37,17 +37,23 @@ def plot_penetration(object_id: str, curves: dict[int, Any], path: Path) -> None
         plt.close(fig)
 
 
+def _kind(reason: str) -> str:
+    """A reason or warning without its values ("penetrates part 3 at q=0.4" -> "penetrates part 3")."""
+    return reason.split(" at q=")[0].split(" (")[0]
+
+
 def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], out: Path) -> dict[str, Any]:
     """Write verdicts.jsonl, summary.json and index.md (linking each result's "plot", a path
     relative to ``out``, where it has one); return the summary."""
     try:
         out.mkdir(parents=True, exist_ok=True)
         joints = [j for r in results for j in r["verdict"]["joints"].values()]
-        reasons = Counter(reason.split(" at q=")[0].split(" (")[0] for j in joints for reason in j["reasons"])
+        reasons = Counter(_kind(reason) for j in joints for reason in j["reasons"])
+        warnings = Counter(_kind(warning) for j in joints for warning in j.get("warnings", []))
         summary = {
             "objects": len(results), "objects_ok": sum(r["verdict"]["ok"] for r in results),
             "joints": len(joints), "joints_ok": sum(j["ok"] for j in joints),
-            "reasons": dict(reasons.most_common()), "skipped": len(skipped),
+            "reasons": dict(reasons.most_common()), "warnings": dict(warnings.most_common()), "skipped": len(skipped),
         }
         with (out / "verdicts.jsonl").open("w", encoding="utf-8") as f:
             for r in results:
@@ -57,10 +63,11 @@ def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], o
         (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
         lines = ["# Physics sweep", "", f"{summary['objects_ok']} / {summary['objects']} objects pass, "
                  f"{summary['joints_ok']} / {summary['joints']} joints pass, {len(skipped)} skipped.", "",
-                 "| object | joint | ok | reasons |", "|---|---|---|---|"]
+                 "| object | joint | ok | reasons | warnings |", "|---|---|---|---|---|"]
         for r in results:
             for part, j in r["verdict"]["joints"].items():
-                lines.append(f"| {r['object']} | {part} | {'yes' if j['ok'] else 'no'} | {'; '.join(j['reasons'])} |")
+                lines.append(f"| {r['object']} | {part} | {'yes' if j['ok'] else 'no'} | {'; '.join(j['reasons'])} | "
+                             f"{'; '.join(j.get('warnings', []))} |")
             if r.get("plot"):
                 lines.append(f"\n![{r['object']}]({r['plot']})\n")
         (out / "index.md").write_text("\n".join(lines) + "\n", encoding="utf-8")

@@ -1,6 +1,10 @@
 """Per-joint and per-object verdicts from the check results (pure numpy over the batched tables).
 
-Reasons are short stable strings: "penetrates parent at rest", "penetrates part P at q=V",
+The checks produce typed findings (``eval.physics.findings``: check, severity, joints, parts, depth,
+joint values); the verdict JSON carries them and, for readers of text, each as a short stable
+string, a joint's failures under "reasons" and its warnings under "warnings" ("limit past contact:
+hi (stops at q=V)": a limit a little past where the joint stops; only failures fail). Strings:
+"penetrates parent at rest", "penetrates part P at q=V",
 "penetrates part P (passes through it) at q=V" (a thin board driven through another, see ``crossing``),
 "penetrates part P while joint J moves (q=V)" (another joint's sweep runs into this joint's part, or carries it into P;
 "penetrates part P (passes through it) while joint J moves (q=V)" when the two pass through each other),
@@ -10,7 +14,7 @@ to meet: REST_CONTACT_TOL_NU), "detached from its guide (part G, ...)" (a slide 
 part it runs in, see ``guides``), "pivot detached", "limit unreachable: lo|hi", "disagrees with part B
 (symmetric|instance): ..." (a related part articulates otherwise, see ``relations``), and object-level
 "rest interpenetration: parts A,B" (fails the object), "combination interpenetration: parts A,B"
-(reported only), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
+(a warning), "unstable under gravity". Joint values V are in radians (hinge) or nu (slide).
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import trimesh
 from eval.physics import cpu_backend
 from eval.physics.crossing import crossings
 from eval.physics.dynamics import gravity, reachability, tolerated_pairs
+from eval.physics.findings import FAILURE, WARNING, Finding, describe
 from eval.physics.floor import first_below_floor
 from eval.physics.guides import carried_out_of_guide, welded
 from eval.physics.relations import relation_disagreements
@@ -36,7 +41,8 @@ from jax3dc.structure.schema import Structure
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
                  backend: str = "c", dynamics: bool = True, mounted: bool = False) -> dict[str, Any]:
-    """The verdict {"ok", "joints": {id: {"ok", "reasons"}}, "checks": {...}} of one object.
+    """The verdict {"ok", "joints": {id: {"ok", "reasons", "warnings"}}, "checks": {...}, "findings": [...]}
+    of one object (``verdict_json``).
 
     ``backend``: "c" (C MuJoCo) or "mjx" for the kinematic checks and the rollouts; ``dynamics``
     adds limit reachability and the gravity test; ``mounted``: the object is fixed in place in use
@@ -61,7 +67,7 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
         from eval.physics.mjx_backend import mjx_pair_distances
         bare = build_sim_model(structure, parts, scale, SimOptions(), kinematic.pieces)
         distances = mjx_pair_distances(bare.model, states.qpos)
-    verdict = verdict_from(structure, parts, kinematic, states, distances, proximity)
+    found = findings_from(structure, parts, kinematic, states, distances, proximity)
     if dynamics:
         if backend == "mjx":
             from eval.physics.mjx_dynamics import mjx_final_qpos
@@ -69,14 +75,9 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
         else:
             rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
         exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
-        extra = reachability(structure, parts, scale, exclude, kinematic.pieces, rollout)
-        problems, sag = gravity(structure, parts, scale, kinematic.pieces, rollout, mounted)
-        verdict["checks"]["gravity"] = problems
-        for part, joint in verdict["joints"].items():
-            joint["reasons"] += extra.get(int(part), []) + sag.get(int(part), [])
-            joint["ok"] = not joint["reasons"]
-        verdict["ok"] = verdict["ok"] and not problems and all(j["ok"] for j in verdict["joints"].values())
-    return verdict, penetration_curves(kinematic, states, distances)
+        found += reachability(structure, parts, scale, exclude, kinematic.pieces, rollout)
+        found += gravity(structure, parts, scale, kinematic.pieces, rollout, mounted)
+    return verdict_json(kinematic.joint_parts, found, dynamics), penetration_curves(kinematic, states, distances)
 
 
 def penetration_curves(sim: SimModel, states: StateBatch, distances: np.ndarray) -> dict[int, Any]:
@@ -94,9 +95,33 @@ def penetration_curves(sim: SimModel, states: StateBatch, distances: np.ndarray)
     return curves
 
 
-def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: SimModel, states: StateBatch,
-                 distances: np.ndarray, proximity: np.ndarray | None = None) -> dict[str, Any]:
-    """Kinematic verdict from [S, nbody, nbody] contact distances (penetration) and proximity
+def verdict_json(joint_parts: list[int], found: list[Finding], gravity_checked: bool = True) -> dict[str, Any]:
+    """The verdict JSON of the findings: "ok" (no failure), per joint "ok", its failure "reasons"
+    and its "warnings", object-level "checks" (rest, combinations, gravity when it ran) as reason
+    strings, and the typed "findings" themselves. Only failures fail a joint or the object."""
+    joints = {str(p): {"ok": True, "reasons": [], "warnings": []} for p in joint_parts}
+    checks: dict[str, list[str]] = {"rest": [], "combinations": []}
+    if gravity_checked:
+        checks["gravity"] = []
+    for f in found:
+        if f.check in OBJECT_CHECKS:
+            checks[OBJECT_CHECKS[f.check]].append(describe(f))
+            continue
+        joint = joints[str(f.joints[0])]
+        joint["reasons" if f.severity == FAILURE else "warnings"].append(describe(f))
+        joint["ok"] = not joint["reasons"]
+    checks["rest"].sort()
+    checks["combinations"].sort()
+    failed = any(f.severity == FAILURE for f in found)
+    return {"ok": not failed, "joints": joints, "checks": checks, "findings": [f.to_json() for f in found]}
+
+
+OBJECT_CHECKS = {"rest": "rest", "combination": "combinations", "gravity": "gravity"}  # check -> key of "checks"
+
+
+def findings_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: SimModel, states: StateBatch,
+                  distances: np.ndarray, proximity: np.ndarray | None = None) -> list[Finding]:
+    """Kinematic findings from [S, nbody, nbody] contact distances (penetration) and proximity
     distances (contacts within the detachment margin; the same array on the C path)."""
     proximity = distances if proximity is None else proximity
     scale = sim.scale
@@ -104,10 +129,12 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
     group = sim.group_of_body
     distinct = (group[:, None] != group[None, :]) & (group[:, None] >= 0) & (group[None, :] >= 0)
     rest_pen = (distances[0] < -REST_PENETRATION_TOL_NU * scale) & distinct
-    reasons: dict[int, list[str]] = {p: [] for p in sim.joint_parts}
-    checks: dict[str, Any] = {}
-    checks["rest"] = sorted({f"rest interpenetration: parts {min(body_part[a], body_part[b])},{max(body_part[a], body_part[b])}"
-                             for a, b in zip(*np.nonzero(rest_pen)) if a < b})
+    found = [Finding("rest", parts=tuple(sorted((body_part[a], body_part[b]))), depth=float(-distances[0][a, b]) / scale)
+             for a, b in zip(*np.nonzero(rest_pen)) if a < b]
+
+    def has(part: int, checks: set[str]) -> bool:
+        return any(f.joints[0] == part and f.check in checks for f in found if f.joints)
+
     # pairs already deeper than the sweep tolerance at rest are the rest check's business (at its own tolerance)
     rest_deep = distances[0] < -PENETRATION_TOL_NU * scale
     pen = (distances < -PENETRATION_TOL_NU * scale) & distinct[None] & ~rest_deep[None]
@@ -123,7 +150,8 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
         moved = sim.moved_by[k]
         child, parent = sim.part_body[part], sim.parent_body[k]
         if rest_pen[child, parent]:
-            reasons[part].append("penetrates parent at rest")
+            found.append(Finding("rest parent", joints=(part,), parts=(body_part[parent],),
+                                 depth=float(-distances[0][child, parent]) / scale))
         across = moved[:, None] ^ moved[None, :]
         rows = _nearest_rest_first(np.nonzero(states.joint == k)[0], states.value, sim.model.qpos0[sim.joint_qpos[k]])
         hit = None
@@ -132,39 +160,41 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
             if len(pairs):
                 a, b = pairs[0]
                 other = b if moved[a] else a
-                hit = f"penetrates part {body_part[other]} at q={states.value[s] / unit:.3f}"
+                hit = Finding("penetration", joints=(part,), parts=(body_part[other],), depth=float(-distances[s][a, b]) / scale,
+                              state=((part, float(states.value[s] / unit)),))
                 break
         if hit is None and part in crossed:
             other, value = crossed[part]
-            hit = f"penetrates part {other} (passes through it) at q={value:.3f}"
+            hit = Finding("crossing", joints=(part,), parts=(other,), state=((part, value),))
         if part in crossed:  # ... and a jointed part it passes through (or that passes through it) while staying put
             other, value = crossed[part]
             k2 = joint_of_group.get(int(group[sim.part_body[other]]))
             hurt = None if k2 is None or sim.moved_by[k2][child] else sim.joint_parts[k2]
-            if hurt is not None and not any(r.startswith("penetrates part") for r in reasons[hurt]):
-                reasons[hurt].append(f"penetrates part {part} (passes through it) while joint {part} moves (q={value:.3f})")
+            if hurt is not None and not has(hurt, PENETRATES):
+                found.append(Finding("crossing", joints=(hurt,), parts=(part,), state=((part, value),)))
         if hit:
-            reasons[part].append(hit)
+            found.append(hit)
         below = first_below_floor(structure, parts, part, states.value[rows] / unit)
         if below is not None:
-            reasons[part].append(f"penetrates the floor at q={below:.3f}")
+            found.append(Finding("floor", joints=(part,), state=((part, below),)))
         # a jointed part that this sweep runs into is at fault too: it stays put while the part
         # it should move with (a handle on a door, given the wrong parent) swings through it
         for s in rows:
+            state = ((part, float(states.value[s] / unit)),)
             for a, b in np.argwhere(pen[s] & across):
                 other = b if moved[a] else a
+                depth = float(-distances[s][a, b]) / scale
                 k2 = joint_of_group.get(int(group[other]))
                 hurt = None if k2 is None or sim.moved_by[k2][child] else sim.joint_parts[k2]  # not an ancestor
-                if hurt is not None and not any(r.startswith("penetrates part") for r in reasons[hurt]):
-                    reasons[hurt].append(f"penetrates part {body_part[a if other == b else b]} "
-                                         f"while joint {part} moves (q={states.value[s] / unit:.3f})")
+                if hurt is not None and not has(hurt, PENETRATES):
+                    found.append(Finding("penetration", joints=(hurt,), parts=(body_part[a if other == b else b],),
+                                         depth=depth, state=state))
                 # ... and so is a jointed part that this sweep carries into another (a rack hung on the
                 # dishwasher door instead of the tub: the door swings it through the tub)
                 k3 = joint_of_group.get(int(group[a if other == b else b]))
                 carried = None if k3 is None or k3 == k else sim.joint_parts[k3]
-                if carried is not None and not any(r.startswith("penetrates part") for r in reasons[carried]):
-                    reasons[carried].append(f"penetrates part {body_part[other]} "
-                                            f"while joint {part} moves (q={states.value[s] / unit:.3f})")
+                if carried is not None and not has(carried, PENETRATES):
+                    found.append(Finding("penetration", joints=(carried,), parts=(body_part[other],), depth=depth, state=state))
         parent_group = group == group[parent]
         overlap = None  # slides: the child's overlap with its parent along the axis, per sweep value (nu)
         guided = False  # ... and whether it runs in a guide there
@@ -176,50 +206,45 @@ def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: S
         if overlap is not None and not guided and _lifts_off(overlap, values_nu):  # a lid: parting from its parent is the motion
             gone = [v for v in values_nu if -overlap(v) > LIFT_OFF_MAX_NU]
             if gone:
-                reasons[part].append(f"detached from parent (lifted off too far) at q={gone[0]:.3f}")
+                found.append(Finding("lifted off", joints=(part,), depth=-overlap(gone[0]), state=((part, float(gone[0])),)))
         else:
             for s in rows:
                 near = proximity[s][np.ix_(moved, parent_group)]
                 if not np.any(near < DETACH_TOL_NU * scale):
-                    reasons[part].append(f"detached from parent at q={states.value[s] / unit:.3f}")
+                    found.append(Finding("detached", joints=(part,), state=((part, float(states.value[s] / unit)),)))
                     break
-        if guided and not any(r.startswith("detached") for r in reasons[part]):
+        if guided and not has(part, DETACHED):
             out = [v for v in values_nu if overlap(v) <= 0.0]  # a drawer or rack in its guide must stay in it
             if out:
-                reasons[part].append(f"detached from parent (slides out of its guide) at q={out[0]:.3f}")
+                found.append(Finding("guide", joints=(part,), depth=-overlap(out[0]), state=((part, float(out[0])),)))
         carried = carried_out_of_guide(structure, parts, part)  # a drawer hung on its neighbour leaves its slot
-        if carried is not None and not any(r.startswith("detached") for r in reasons[part]):
+        if carried is not None and not has(part, DETACHED):
             guide, values = carried
-            opened = ", ".join(f"joint {p} at {v:.3f}" for p, v in values.items())
-            reasons[part].append(f"detached from its guide (part {guide}, runs out of it with {opened})")
+            found.append(Finding("carried out of guide", joints=(part,), parts=(guide,),
+                                 state=tuple((p, float(v)) for p, v in values.items())))
         # a joint connects two bodies that meet: a part given a parent it does not touch at rest (a
         # drawer hung on the drawer beside it, which would carry it out of its own slot) is not held by it
         gap = float(np.min(proximity[0][np.ix_(group == group[child], parent_group)], initial=np.inf)) / scale
         if gap > REST_CONTACT_TOL_NU:
-            shown = f"{gap:.3f} nu" if np.isfinite(gap) else f"over {DETACH_TOL_NU} nu"
-            reasons[part].append(f"detached from parent at rest (gap {shown})")
+            found.append(Finding("rest gap", joints=(part,), parts=(body_part[parent],), depth=gap if np.isfinite(gap) else None))
         if not _pivot_attached(structure, parts, part):
-            reasons[part].append("pivot detached")
-    for part, found in relation_disagreements(structure, parts).items():
-        reasons[part] += found
+            found.append(Finding("pivot", joints=(part,), parts=(body_part[parent],)))
+    found += relation_disagreements(structure, parts)
     combos = states.joint == -2
-    found = set()
+    pairs = set()
     for s in np.nonzero(combos)[0]:
         for a, b in np.argwhere(pen[s]):
             if a < b:
-                found.add(f"combination interpenetration: parts {min(body_part[a], body_part[b])},{max(body_part[a], body_part[b])}")
-    single = {tuple(sorted((a, b))) for s in np.nonzero(states.joint >= 0)[0] for a, b in np.argwhere(pen[s])}
-    checks["combinations"] = sorted(r for r in found if not _pair_of(r) & {(body_part[a], body_part[b]) for a, b in single})
-    joints = {str(p): {"ok": not r, "reasons": r} for p, r in reasons.items()}
+                pairs.add(tuple(sorted((body_part[a], body_part[b]))))
+    single = {tuple(sorted((body_part[a], body_part[b]))) for s in np.nonzero(states.joint >= 0)[0] for a, b in np.argwhere(pen[s])}
     # combinations are reported, not failed: real objects have dependent joints (a dishwasher rack
     # slides out only with the door open, folded eyeglass temples cross)
-    ok = all(j["ok"] for j in joints.values()) and not checks["rest"]
-    return {"ok": ok, "joints": joints, "checks": checks}
+    found += [Finding("combination", WARNING, parts=pair) for pair in sorted(pairs - single)]
+    return found
 
 
-def _pair_of(reason: str) -> set[tuple[int, int]]:
-    a, b = (int(x) for x in reason.rsplit(" ", 1)[1].split(","))
-    return {(a, b), (b, a)}
+PENETRATES = {"penetration", "crossing"}  # a joint blamed for one penetration is not blamed for another
+DETACHED = {"detached", "lifted off", "guide", "carried out of guide", "rest gap"}
 
 
 def _nearest_rest_first(rows: np.ndarray, values: np.ndarray, rest: float) -> np.ndarray:

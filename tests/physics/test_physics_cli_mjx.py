@@ -39,7 +39,7 @@ def test_cli_check_writes_verdict(tmp_path, capsys):
     assert rc == 0
     verdict = json.loads((tmp_path / "v.json").read_text())
     assert verdict == json.loads(capsys.readouterr().out)
-    assert verdict["ok"] and verdict["joints"]["2"] == {"ok": True, "reasons": []}
+    assert verdict["ok"] and verdict["joints"]["2"] == {"ok": True, "reasons": [], "warnings": []}
     # a lid hinged the wrong way swings into the base: still exit 0, the verdict says why
     flipped = to_json(structure).replace('"axis":[-1.0,0.0,0.0]', '"axis":[1.0,0.0,0.0]')
     assert flipped != to_json(structure)

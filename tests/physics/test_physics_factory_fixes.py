@@ -13,6 +13,7 @@ import pytest
 from data_pipeline.factories import generate_object
 from eval.physics.floor import first_below_floor
 from eval.physics.kinematics import joint_motion
+from eval.physics.tolerances import LIMIT_TOL_HINGE_RAD
 from eval.physics.verdict import _pivot_attached, check_object
 from jax3dc.structure.schema import Structure
 
@@ -68,7 +69,11 @@ def test_lamp_shade_reaches_its_stop_at_the_arm_but_not_beyond(seed):
     nodes = dict(lamp.structure.nodes)
     nodes[shade] = dataclasses.replace(nodes[shade], joint=dataclasses.replace(joint, range=(joint.range[0], 0.6)))
     old = check_object(dataclasses.replace(lamp.structure, nodes=nodes), lamp.parts, lamp.scale_m_per_nu)
-    assert any(r.startswith(("limit unreachable: hi", "penetrates part")) for r in old["joints"][str(shade)]["reasons"]), old
+    # the shade stops at the rod short of the old limit: a limit finding carrying where it stops (0.231
+    # rad short at seed 0: a failure; 0.087 at seed 1: a warning), or the sweep drives it into the rod
+    stops = [f["reachable"] for f in old["findings"] if f["check"] == "limit" and f["joints"] == [shade] and f["limit"] == "hi"]
+    assert (stops and stops[0] < 0.6 - LIMIT_TOL_HINGE_RAD) or any(
+        r.startswith("penetrates part") for r in old["joints"][str(shade)]["reasons"]), old
 
 
 @pytest.mark.parametrize("seed", (0, 1, 2))

@@ -9,10 +9,19 @@ import pytest
 import trimesh
 
 from data_pipeline.factories import generate_object
+from eval.physics.findings import Finding, describe
 from eval.physics.mutations import mutations_of
 from eval.physics.relations import relation_disagreements
+from eval.physics.tolerances import RELATION_MOTION_TOL_NU
 from eval.physics.verdict import check_object
 from jax3dc.structure.schema import Joint, Node, Relation, Structure
+
+
+def _by_joint(found: list[Finding]) -> dict[int, list[Finding]]:
+    out: dict[int, list[Finding]] = {}
+    for f in found:
+        out.setdefault(f.joints[0], []).append(f)
+    return out
 
 
 def _box(lo, hi) -> trimesh.Trimesh:
@@ -43,31 +52,35 @@ def _with_joint(structure: Structure, part: int, **changes) -> Structure:
 @pytest.mark.parametrize("relation", ["symmetric", "instance"])
 def test_mirrored_doors_agree_and_an_odd_one_is_flagged_on_both(relation):
     structure, parts = _double_door(relation)
-    assert relation_disagreements(structure, parts) == {}
+    assert relation_disagreements(structure, parts) == []
     flipped = _with_joint(structure, 3, axis=(0.0, 0.0, -1.0))  # the right door opens into the carcass
-    found = relation_disagreements(flipped, parts)
+    found = _by_joint(relation_disagreements(flipped, parts))
     assert set(found) == {2, 3}
-    assert found[3][0].startswith(f"disagrees with part 2 ({relation}): they move differently")
+    assert found[3][0].check == "relation motion" and found[3][0].parts == (2,) and found[3][0].relation == relation
+    assert found[3][0].depth > RELATION_MOTION_TOL_NU
+    assert describe(found[3][0]).startswith(f"disagrees with part 2 ({relation}): they move differently")
     farther = _with_joint(structure, 2, range=(0.0, 3.0))
-    assert set(relation_disagreements(farther, parts)) == {2, 3}
+    assert set(_by_joint(relation_disagreements(farther, parts))) == {2, 3}
     slid = _with_joint(structure, 2, type="slide")
-    assert relation_disagreements(slid, parts)[2] == [f"disagrees with part 3 ({relation}): a hinge where the other is a slide"]
+    assert [describe(f) for f in _by_joint(relation_disagreements(slid, parts))[2]] == [
+        f"disagrees with part 3 ({relation}): a hinge where the other is a slide"]
     # a slightly different range (0.02 rad: under a millimetre at the door's edge) is the same motion
-    assert relation_disagreements(_with_joint(structure, 2, range=(0.0, 1.52)), parts) == {}
+    assert relation_disagreements(_with_joint(structure, 2, range=(0.0, 1.52)), parts) == []
     # the same motion written the other way round: axis flipped, range negated
-    assert relation_disagreements(_with_joint(structure, 3, axis=(0.0, 0.0, -1.0), range=(-1.5, 0.0)), parts) == {}
+    assert relation_disagreements(_with_joint(structure, 3, axis=(0.0, 0.0, -1.0), range=(-1.5, 0.0)), parts) == []
 
 
 def test_a_door_on_an_unrelated_parent_is_flagged_and_a_loose_relation_is_left_alone():
     structure, parts = _double_door()
     nodes = dict(structure.nodes)
     nodes[3] = dataclasses.replace(nodes[3], parent=4)
-    found = relation_disagreements(dataclasses.replace(structure, nodes=nodes), parts)
-    assert found[3] == ["disagrees with part 2 (symmetric): their parents 1 and 4 differ and are not related"]
+    found = _by_joint(relation_disagreements(dataclasses.replace(structure, nodes=nodes), parts))
+    assert [f.parts for f in found[3]] == [(2, 1, 4)]
+    assert [describe(f) for f in found[3]] == ["disagrees with part 2 (symmetric): their parents 1 and 4 differ and are not related"]
     # parts that no translation or mirror carries onto each other: the relation says nothing of their joints
     loose = dict(parts)
     loose[3] = _box([0.0, -0.32, -0.5], [0.3, -0.3, 0.5])
-    assert relation_disagreements(_with_joint(structure, 3, axis=(0.0, 0.0, -1.0)), loose) == {}
+    assert relation_disagreements(_with_joint(structure, 3, axis=(0.0, 0.0, -1.0)), loose) == []
 
 
 @pytest.mark.parametrize("category,seed", [("cabinet", 1), ("wardrobe", 1), ("window", 0), ("dishwasher", 0)])
@@ -75,12 +88,12 @@ def test_factory_pairs_agree_and_their_range_doubled_or_swapped_twins_do_not(cat
     # cabinet doors (symmetric), a wardrobe's sliding doors (instances moving as mirror images), a
     # window's sash beside its fixed pane (an instance pair with one joint), dishwasher racks (instances)
     obj = generate_object(category, seed)
-    assert relation_disagreements(obj.structure, obj.parts) == {}
+    assert relation_disagreements(obj.structure, obj.parts) == []
     jointed = {p for r in obj.structure.relations for p in (r.a, r.b)
                if all(obj.structure.nodes[q].joint is not None for q in (r.a, r.b))}
     caught = [m for m in mutations_of(obj.structure, obj.parts) if m.part in jointed
               and m.kind in ("range doubled", "hinge-slide swapped")
-              and relation_disagreements(m.structure, obj.parts).get(m.part)]
+              and _by_joint(relation_disagreements(m.structure, obj.parts)).get(m.part)]
     assert len(caught) == 2 * len(jointed)
 
 

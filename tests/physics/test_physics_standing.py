@@ -10,6 +10,7 @@ import pytest
 
 from data_pipeline.factories import FACTORIES, generate_object
 from eval.physics.dynamics import gravity
+from eval.physics.findings import describe
 from eval.physics.ground_truth import factory_objects
 from eval.physics.tolerances import GRAVITY_TILT_RAD
 
@@ -18,12 +19,10 @@ def test_free_standing_faucet_falls_over_but_passes_mounted():
     # a faucet's spout overhangs its narrow body: stood free on a floor it falls onto its side
     obj = generate_object("faucet", 0)
     assert FACTORIES["faucet"].mounted
-    free, _ = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None)
-    assert len(free) == 1 and free[0].startswith("unstable under gravity"), free
-    tilt = float(free[0].rsplit("tilted ", 1)[1].split()[0])
-    assert tilt > 2 * GRAVITY_TILT_RAD, free  # it fell onto another face, not a rock onto a nearby support
-    held, sag = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None, mounted=True)
-    assert held == [] and sag and not any(sag.values()), (held, sag)
+    free = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None)
+    assert [f.check for f in free] == ["gravity"] and describe(free[0]).startswith("unstable under gravity"), free
+    assert free[0].tilt > 2 * GRAVITY_TILT_RAD, free  # it fell onto another face, not a rock onto a nearby support
+    assert gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None, mounted=True) == []
 
 
 def test_mounted_object_still_gets_the_sag_test(monkeypatch):
@@ -31,8 +30,10 @@ def test_mounted_object_still_gets_the_sag_test(monkeypatch):
     # root does not stop the sag test from reporting it
     obj = generate_object("faucet", 0)
     monkeypatch.setattr("eval.physics.dynamics.GRAVITY_JOINT_DRIFT", -1.0)
-    _, sag = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None, mounted=True)
-    assert sag and all(r and r[0].startswith("sags under gravity") for r in sag.values()), sag
+    found = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None, mounted=True)
+    jointed = {p for p, n in obj.structure.nodes.items() if n.joint is not None}
+    assert jointed and {f.joints[0] for f in found if f.check == "sag"} == jointed, found
+    assert all(describe(f).startswith("sags under gravity") for f in found), found
 
 
 @pytest.mark.parametrize("category", ["eyeglasses", "kitchen_unit"])
@@ -40,7 +41,7 @@ def test_free_standing_ground_truth_stands(category):
     # eyeglasses rock back onto their temple ends; a kitchen unit stands on feet behind its plinth
     obj = next(factory_objects([category], [1]))
     assert not obj.mounted
-    problems, _ = gravity(obj.structure, obj.parts, obj.scale, None)
+    problems = [f for f in gravity(obj.structure, obj.parts, obj.scale, None) if f.check == "gravity"]
     assert problems == [], problems
 
 
