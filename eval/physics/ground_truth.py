@@ -20,6 +20,7 @@ import trimesh
 
 from eval.physics.mutations import Mutation, mutations_of
 from eval.physics.verdict import check_object
+from jax3dc.mounted import is_mounted
 from jax3dc.structure.schema import Structure
 
 
@@ -42,10 +43,13 @@ def factory_objects(categories: Iterable[str], seeds: Iterable[int]) -> Iterator
 
 
 def imported_objects(directories: Iterable[Path]) -> Iterator[GroundTruthObject]:
+    """Imported objects, mounted where their category is (a PartNet-Mobility door, window or switch
+    is set in a wall: stood free on a floor its frame would fall over)."""
     from data_pipeline.importers.source import import_object
     for directory in directories:
         obj = import_object(Path(directory))
-        yield GroundTruthObject(Path(directory).name, obj.structure, obj.parts, float(obj.meta.get("scale", 1.0)))
+        yield GroundTruthObject(Path(directory).name, obj.structure, obj.parts, float(obj.meta.get("scale", 1.0)),
+                                is_mounted(obj.meta.get("category")))
 
 
 def false_alarms(objects: Iterable[GroundTruthObject], on_result: Callable | None = None, backend: str = "c") -> dict:
