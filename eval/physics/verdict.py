@@ -40,26 +40,30 @@ from jax3dc.export.assembly import frames_nu, tree_order
 from jax3dc.structure.schema import Structure
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
-                 backend: str = "c", dynamics: bool = True, mounted: bool = False) -> dict[str, Any]:
+                 backend: str = "c", dynamics: bool = True, mounted: bool = False,
+                 pieces: dict[int, list[np.ndarray]] | None = None) -> dict[str, Any]:
     """The verdict {"ok", "joints": {id: {"ok", "reasons", "warnings"}}, "checks": {...}, "findings": [...]}
     of one object (``verdict_json``).
 
     ``backend``: "c" (C MuJoCo) or "mjx" for the kinematic checks and the rollouts; ``dynamics``
     adds limit reachability and the gravity test; ``mounted``: the object is fixed in place in use
-    (a faucet, a wall cabinet), so the gravity test holds its root instead of standing it on a floor.
+    (a faucet, a wall cabinet), so the gravity test holds its root instead of standing it on a floor;
+    ``pieces``: the parts' collision pieces (``jax3dc.export.simulation``) when they are given, as an
+    exported file gives them, instead of decomposing the meshes.
     """
-    return check_object_with_curves(structure, parts, scale, backend, dynamics, mounted)[0]
+    return check_object_with_curves(structure, parts, scale, backend, dynamics, mounted, pieces=pieces)[0]
 
 
 def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
                              backend: str = "c", dynamics: bool = True, mounted: bool = False,
-                             threads: int | None = None) -> tuple[dict[str, Any], dict[int, Any]]:
+                             threads: int | None = None, pieces: dict[int, list[np.ndarray]] | None = None
+                             ) -> tuple[dict[str, Any], dict[int, Any]]:
     """``check_object`` and, per jointed part, (joint values, deepest penetration in nu) over its sweep.
 
     ``threads``: C rollout threads (default: every core; fewer when objects run in parallel processes).
     """
     with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
-        kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale))
+        kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale), pieces)
     states = check_states(kinematic)
     proximity = cpu_backend.pair_distances(kinematic.model, states.qpos)
     distances = proximity

@@ -260,13 +260,13 @@ def _mjcf(export: list[ExportPart], pieces: dict[int, list[np.ndarray]], scale: 
 
 def _visual_geom(part: ExportPart, asset: ET.Element, body: ET.Element, files: dict[str, bytes]) -> None:
     """The part as it looks, never colliding: its mesh, or for a flat part (which MuJoCo refuses as a
-    mesh: "coplanar vertices") the 1 mm box of its bounds."""
+    mesh: "coplanar vertices") the 1 mm box of its bounds; the mesh file is written either way."""
     look = {"material": f"material_{part.material_id}", "contype": "0", "conaffinity": "0", "group": "1"}
+    files[f"{MESH_DIR}/{part.part_id}.obj"] = obj_text(part.mesh).encode()  # a flat part's too: a check of the file reads it
     if part.solid == "box":
         centre, size = part.box_fallback()
         ET.SubElement(body, "geom", name=f"visual_{part.part_id}", type="box", pos=vec(centre), size=vec(size / 2), **look)
         return
-    files[f"{MESH_DIR}/{part.part_id}.obj"] = obj_text(part.mesh).encode()
     ET.SubElement(asset, "mesh", name=f"visual_{part.part_id}", file=f"{part.part_id}.obj",
                   inertia="exact" if part.solid == "mesh" else "convex")
     ET.SubElement(body, "geom", name=f"visual_{part.part_id}", type="mesh", mesh=f"visual_{part.part_id}", **look)
