@@ -173,7 +173,7 @@ def param_count(model: Qwen3VL, prefix: str = "") -> int:
 
 def load_pretrained(path: str | Path, dtype=jnp.float32, mesh: jax.sharding.Mesh | None = None,
                     rules: Rules | None = None, *, compute_dtype=None, attention_impl: str | None = None,
-                    remat: bool = False) -> tuple[Qwen3VL, Qwen3VLConfig]:
+                    remat: str = "none", scan_layers: bool = False) -> tuple[Qwen3VL, Qwen3VLConfig]:
     """Builds Qwen3-VL from a HF checkpoint directory with parameters stored in ``dtype``
     (``compute_dtype``, default the same, is what the layers compute in).
 
@@ -183,7 +183,8 @@ def load_pretrained(path: str | Path, dtype=jnp.float32, mesh: jax.sharding.Mesh
     """
     config = read_config(path)
     abstract = abstract_model(config, dtype=dtype if compute_dtype is None else compute_dtype,
-                              param_dtype=dtype, attention_impl=attention_impl, remat=remat)
+                              param_dtype=dtype, attention_impl=attention_impl, remat=remat,
+                              scan_layers=scan_layers)
     graphdef, state = nnx.split(abstract)
     if mesh is not None:
         shard_state = state_shardings(state, mesh, rules or LOGICAL_RULES)

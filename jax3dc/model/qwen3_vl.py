@@ -56,7 +56,9 @@ import numpy as np
 from flax import nnx
 
 from jax3dc.model.config import Qwen3VLConfig
+from jax3dc.model.layer_stack import remat_policy, scan_layers, stackable
 from jax3dc.model.layers import Dense
+from jax3dc.model.packed_attention import packed_rows
 from jax3dc.model.rope import get_rope_index, text_rope
 from jax3dc.model.text import DecoderLayer, TextModel
 from jax3dc.model.vision import VisionModel
@@ -116,24 +118,19 @@ def _attention_mask(key_valid: jax.Array, q_pos: jax.Array, k_pos: jax.Array) ->
     return (mask | (k_pos[None, :] == q_pos[:, None])[None])[:, None]
 
 
-def _segment_mask(segment_ids: jax.Array) -> jax.Array:
-    """[B, 1, L, L]: causal within each segment (packed example); segment 0 is padding, which
-    sees only itself."""
-    length = segment_ids.shape[1]
-    pos = jnp.arange(length)
-    causal = pos[None, :] <= pos[:, None]
-    same = (segment_ids[:, :, None] == segment_ids[:, None, :]) & (segment_ids[:, None, :] > 0)
-    return ((same & causal[None]) | jnp.eye(length, dtype=bool)[None])[:, None]
-
-
 class Qwen3VL(nnx.Module):
     """Vision tower + DeepStack + Qwen3 decoder + LM head (tied to the embedding or not)."""
 
     def __init__(self, config: Qwen3VLConfig, *, rngs: nnx.Rngs, dtype=jnp.float32,
-                 param_dtype=jnp.float32, attention_impl: str | None = None, remat: bool = False):
+                 param_dtype=jnp.float32, attention_impl: str | None = None, remat: str = "none",
+                 scan_layers: bool = False):
+        remat_policy(remat)  # an unknown policy name fails here, not at the first traced step
         self.config = config
         self.dtype = dtype
         self.remat = remat
+        # scan the decoder layers after the DeepStack ones when no KV cache is involved (training
+        # and scoring); generation keeps the loop, which threads each layer's cache slice
+        self.scan_layers = scan_layers
         self.visual = VisionModel(config.vision, rngs=rngs, dtype=dtype, param_dtype=param_dtype,
                                   attention_impl=attention_impl)
         self.language_model = TextModel(config.text, rngs=rngs, dtype=dtype, param_dtype=param_dtype,
@@ -187,17 +184,26 @@ class Qwen3VL(nnx.Module):
 
     def _layers(self, x, cos, sin, mask, deepstack, image_mask, caches=None, write_index=None, from_cache=True,
                 row_start=None):
+        layers = self.language_model.layers
+        # the layers that take DeepStack features run one by one; the rest may run as one scan
+        unrolled = len(layers)
+        if self.scan_layers and caches is None and len(layers) - len(deepstack) > 1 \
+                and stackable(layers[len(deepstack):]):
+            unrolled = len(deepstack)
+        policy = remat_policy(self.remat)
         new_caches = []
-        for i, layer in enumerate(self.language_model.layers):
-            cache = None if caches is None else caches[i]
-            if self.remat:
-                x, cache = nnx.remat(DecoderLayer.__call__, static_argnums=(7,))(
+        for i in range(unrolled):
+            layer, cache = layers[i], None if caches is None else caches[i]
+            if self.remat != "none":
+                x, cache = nnx.remat(DecoderLayer.__call__, static_argnums=(7,), policy=policy)(
                     layer, x, cos, sin, mask, cache, write_index, from_cache)
             else:
                 x, cache = layer(x, cos, sin, mask, cache, write_index, from_cache)
             new_caches.append(cache)
             if i < len(deepstack):
                 x = place_image_tokens(x, image_mask, deepstack[i], add=True, row_start=row_start)
+        if unrolled < len(layers):
+            x = scan_layers(layers[unrolled:], x, lambda layer, h: layer(h, cos, sin, mask)[0], self.remat)
         return self.language_model.norm(x), new_caches
 
     # ------------------------------------------------------------------ forward
@@ -211,8 +217,8 @@ class Qwen3VL(nnx.Module):
         t = self.config.text
         cos, sin = text_rope(position_ids, t.head_dim, t.rope_theta, t.mrope_section)
         mask = None
-        if segment_ids is not None:
-            mask = _segment_mask(segment_ids)
+        if segment_ids is not None:  # packed rows: at most one example per image slot
+            mask = packed_rows(segment_ids, images_per_row or input_ids.shape[1])
         elif attention_mask is not None:
             pos = jnp.arange(input_ids.shape[1])
             mask = _attention_mask(attention_mask.astype(bool), pos, pos)

@@ -11,9 +11,11 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 from flax import nnx
+from jax.ad_checkpoint import checkpoint_name
 
 from jax3dc.model.config import TextConfig
 from jax3dc.model.layers import Dense, RMSNorm, activation
+from jax3dc.model.packed_attention import PackedRows, packed_attention
 from jax3dc.model.rope import apply_rotary
 from jax3dc.sharding import constrain
 
@@ -32,13 +34,14 @@ class TextAttention(nnx.Module):
         self.k_norm = RMSNorm(hd, cfg.rms_norm_eps, "head_dim", dtype=dtype, param_dtype=param_dtype)
         self.attention_impl = attention_impl
 
-    def __call__(self, x: jax.Array, cos: jax.Array, sin: jax.Array, mask: jax.Array | None,
+    def __call__(self, x: jax.Array, cos: jax.Array, sin: jax.Array, mask: jax.Array | PackedRows | None,
                  cache: LayerCache | None = None,
                  write_index: jax.Array | None = None,
                  from_cache: bool = True) -> tuple[jax.Array, LayerCache | None]:
-        q = apply_rotary(self.q_norm(self.q_proj(x)), cos, sin)
-        k = apply_rotary(self.k_norm(self.k_proj(x)), cos, sin)
-        v = self.v_proj(x)
+        # names for the `qkv` remat policy (layer_stack.py): the projections it keeps
+        q = apply_rotary(self.q_norm(checkpoint_name(self.q_proj(x), "query_proj")), cos, sin)
+        k = apply_rotary(self.k_norm(checkpoint_name(self.k_proj(x), "key_proj")), cos, sin)
+        v = checkpoint_name(self.v_proj(x), "value_proj")
         # q, k and v sharded alike: cuDNN's partitioner refuses mixed shardings on a mesh
         q, k, v = (constrain(t, ("batch", "length", "act_heads", None)) for t in (q, k, v))
         if cache is not None:
@@ -49,7 +52,10 @@ class TextAttention(nnx.Module):
                 k, v = k_all.astype(q.dtype), v_all.astype(q.dtype)
         # a one-token decode query is memory-bound: fused kernels gain nothing there, use XLA's
         impl = self.attention_impl if q.shape[1] > 1 else None
-        out = jax.nn.dot_product_attention(q, k, v, mask=mask, is_causal=mask is None, implementation=impl)
+        if isinstance(mask, PackedRows):
+            out = packed_attention(q, k, v, mask, impl)
+        else:
+            out = jax.nn.dot_product_attention(q, k, v, mask=mask, is_causal=mask is None, implementation=impl)
         out = self.o_proj(out)
         return constrain(out, ("batch", "length", "act_embed")), cache
 
