@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     cfg = getattr(Qwen3VLConfig, args.preset)()
     res: dict = {"preset": args.preset, "impl": args.impl, "remat": args.remat, "device": str(jax.devices()[0])}
     model = build_random(lambda: Qwen3VL(cfg, rngs=nnx.Rngs(0), dtype=jnp.bfloat16, param_dtype=jnp.bfloat16,
-                                         attention_impl=args.impl, remat=args.remat))
+                                         attention_impl=args.impl, remat="full" if args.remat else "none"))
     res.update(bench_train(model, cfg, args.batch, args.length, args.image, args.repeat))
     print(json.dumps(res), flush=True)
     if args.out:

@@ -42,7 +42,7 @@ def run_layout(cfg: Qwen3VLConfig, layout: tuple[int, int, int], args) -> dict:
     n = d * f * t
     mesh = make_mesh(d, f, t, devices=jax.devices()[:n])
     make = lambda: Qwen3VL(cfg, rngs=nnx.Rngs(0), dtype=jnp.bfloat16, param_dtype=jnp.bfloat16,  # noqa: E731
-                           attention_impl=args.impl, remat=args.remat)
+                           attention_impl=args.impl, remat="full" if args.remat else "none")
     model = build_random(make, shardings=model_shardings(nnx.eval_shape(make), mesh))
     graphdef, decoder, rest = nnx.split(model, lambda path, _: path[0] != "visual", ...)
     n_vis = sum(int(np.prod(x.shape)) for x in jax.tree.leaves(nnx.state(model.visual)))

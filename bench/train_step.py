@@ -19,6 +19,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
+REMAT_NAMES = ("none", "full", "minimal", "qkv")  # jax3dc/model/layer_stack.py (not imported: jax loads after the flags)
 
 
 def main() -> None:
@@ -26,7 +27,9 @@ def main() -> None:
     ap.add_argument("--preset", default="qwen3_vl_4b")
     ap.add_argument("--seq", type=int, default=4096)
     ap.add_argument("--batch", type=int, default=1)
-    ap.add_argument("--remat", default="none", choices=("none", "full"))
+    ap.add_argument("--remat", default="none", choices=REMAT_NAMES)
+    ap.add_argument("--scan", action=argparse.BooleanOptionalAction, default=False,
+                    help="decoder layers as one lax.scan, or unrolled (the trainer's default)")
     ap.add_argument("--image", type=int, default=448)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--master-fp32", action="store_true", help="fp32 master weights (more memory)")
@@ -48,7 +51,7 @@ def main() -> None:
     from train.parallel import to_host
 
     cfg = TrainConfig(init=a.preset, data="synthetic", seq_len=a.seq, batch_size=a.batch, grad_accum=1, steps=a.steps + 2,
-                      warmup_steps=1, image_size=a.image, remat=a.remat, master_fp32=a.master_fp32,
+                      warmup_steps=1, image_size=a.image, remat=a.remat, scan_layers=a.scan, master_fp32=a.master_fp32,
                       lora_rank=a.lora_rank,
                       mesh=MeshConfig(*(int(x) for x in a.mesh.split(","))))
     trainer = Trainer(cfg, attention_impl=a.attention)
@@ -84,7 +87,7 @@ def main() -> None:
         import json
 
         row = {"device": dev.device_kind, "devices": jax.device_count(), "mesh": dict(trainer.mesh.shape),
-               "preset": a.preset, "batch": a.batch, "seq": a.seq, "remat": a.remat, "lora_rank": a.lora_rank, "step_s": dt,
+               "preset": a.preset, "batch": a.batch, "seq": a.seq, "remat": a.remat, "scan": a.scan, "lora_rank": a.lora_rank, "step_s": dt,
                "tokens_per_s": a.batch * a.seq / dt, "tokens_per_s_per_device": a.batch * a.seq / dt / jax.device_count(),
                "mfu_vs_989": flops / 989e12 / jax.device_count(), "peak_mem_gib": max(peaks),
                "setup_and_compile_s": compiled - started}

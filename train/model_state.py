@@ -73,7 +73,7 @@ def _constructor(cfg: TrainConfig, mcfg: Qwen3VLConfig, attention_impl: str | No
     compute, master = dtypes(cfg)
     base = compute if cfg.lora_rank else master
     return lambda: Qwen3VL(mcfg, rngs=nnx.Rngs(cfg.seed), dtype=compute, param_dtype=base,
-                           attention_impl=attention_impl, remat=cfg.remat == "full")
+                           attention_impl=attention_impl, remat=cfg.remat, scan_layers=cfg.scan_layers)
 
 
 def _with_lora(cfg: TrainConfig, model: Qwen3VL) -> Qwen3VL:
@@ -129,7 +129,8 @@ def _load_hf(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None) -> Qwen3V
     compute, master = dtypes(cfg)
     model, _ = hf_params.load_pretrained(cfg.init, dtype=compute if cfg.lora_rank else master, mesh=mesh,
                                          rules=sharding_rules(cfg), compute_dtype=compute,
-                                         attention_impl=attention_impl, remat=cfg.remat == "full")
+                                         attention_impl=attention_impl, remat=cfg.remat,
+                                         scan_layers=cfg.scan_layers)
     return model
 
 
