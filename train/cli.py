@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 from train.config import TrainConfig, apply_overrides, describe_fields, validate
 
@@ -43,6 +44,10 @@ def _run(args) -> int:
 
     apply_gpu_defaults(TRAINING_GPU_FLAGS)  # before the backend starts
     initialize_from_env()
+    if cfg.compile_cache and "JAX_COMPILATION_CACHE_DIR" not in os.environ:  # the environment's own wins
+        import jax
+
+        jax.config.update("jax_compilation_cache_dir", os.path.expanduser(cfg.compile_cache))
     from train.loop import run
 
     result = run(cfg)

@@ -96,6 +96,9 @@ class TrainConfig:
     # Run the decoder layers after the DeepStack ones as one lax.scan: 4B compiles in 53 s instead of
     # 64 s, but steps 14 % slower and remat=none no longer fits 80 GB (docs/BENCHMARKS.md, training).
     scan_layers: bool = False
+    # JAX's persistent compilation cache: a resumed or repeated run loads its compiled step from
+    # here instead of compiling again; "" turns it off.
+    compile_cache: str = "~/.cache/jax3dc/xla"
     mesh: MeshConfig = field(default_factory=MeshConfig)
     # Rows of the logical -> mesh axes table (jax3dc/sharding.py LOGICAL_RULES) to replace, as
     # "logical=axis[+axis]" ("logical=": replicated), e.g. batch=data+fsdp,vocab=tensor. Parameters,
