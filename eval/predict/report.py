@@ -75,6 +75,8 @@ def tree_lines(r: ReportInputs) -> list[tuple[int, int, str]]:
             check = joints.get(str(pid))
             if check is not None:
                 text += " | physics: " + ("ok" if check["ok"] else "; ".join(check["reasons"]))
+                if check.get("warnings"):
+                    text += " (warning: " + "; ".join(check["warnings"]) + ")"
         elif node.parent is not None:
             text += " | rigid"
         out.append((depth, pid, text))

@@ -49,7 +49,8 @@ def page_data(inputs: ViewerInputs) -> dict[str, Any]:
     model = viewer_model(inputs.glb, inputs.where)
     verdict = None
     if inputs.verdict is not None:
-        joints = {str(k): {"ok": bool(v.get("ok")), "reasons": [str(r) for r in v.get("reasons", [])]}
+        joints = {str(k): {"ok": bool(v.get("ok")), "reasons": [str(r) for r in v.get("reasons", [])],
+                           "warnings": [str(w) for w in v.get("warnings", [])]}
                   for k, v in (inputs.verdict.get("joints") or {}).items()}
         checks = {str(k): [str(x) for x in v] for k, v in (inputs.verdict.get("checks") or {}).items() if v}
         verdict = {"ok": bool(inputs.verdict.get("ok")), "joints": joints, "checks": checks}

@@ -85,3 +85,17 @@ def test_relations_are_listed(code_run):
     assert relations  # the cabinet's two doors (and handles) mirror each other
     for rel in relations:
         assert f"{rel.type} {rel.a}-{rel.b}" + (f" ({rel.plane})" if rel.plane else "") in page
+
+
+def test_a_joint_warning_is_written_beside_its_passing_verdict(code_run):
+    """A verdict's warning (a limit past contact, say) shows in the part list and does not fail it."""
+    from eval.predict.report import ReportInputs, tree_lines
+
+    structure = code_run.structure
+    jointed = next(pid for pid, node in structure.nodes.items() if node.joint is not None)
+    warning = "limit past contact: hi (stops at q=1.2)"
+    verdict = {"ok": True, "joints": {str(jointed): {"ok": True, "reasons": [], "warnings": [warning]}}}
+    inputs = ReportInputs(image=None, seg=None, palette=code_run.palette, names={}, boxes={}, camera={},
+                          camera_given=False, structure=structure, verdict=verdict, error=None)
+    text = dict((pid, t) for _, pid, t in tree_lines(inputs))[jointed]
+    assert text.endswith(f"physics: ok (warning: {warning})")

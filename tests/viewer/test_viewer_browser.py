@@ -18,7 +18,7 @@ import pytest
 from browser_page import CHANGED, EDGE_PX, Page
 from jax3dc.export.gltf import gltf_bytes
 from jax3dc.viewer import ViewerInputs, write_viewer
-from viewer_cases import FLAGGED, HINGE, MARKUP_NAME, MOVES_WITH, REASON, SLIDE, cabinet, png, verdict
+from viewer_cases import FLAGGED, HINGE, MARKUP_NAME, MOVES_WITH, REASON, SLIDE, WARNING, cabinet, png, verdict
 
 
 @pytest.fixture(scope="module")
@@ -107,6 +107,10 @@ def test_flagged_joint_is_marked_with_its_reason(viewer, shots):
     for part in (HINGE, SLIDE):
         row = page.locator(f'[data-joint="{part}"]')
         assert "flagged" not in row.get_attribute("class").split() and "ok" in row.inner_text()
+    warned = page.locator(f'[data-joint="{HINGE}"]')  # a warning is shown, and does not flag the joint
+    assert "flagged" not in warned.get_attribute("class").split()
+    assert warned.locator(".warn").inner_text() == "ok, with a warning"
+    assert warned.locator("ul.warnings li").all_inner_texts() == [WARNING]
     assert page.locator("#verdict-badge").inner_text() == f"physics: FAIL (joints of parts {FLAGGED} flagged)"
     # the flagged part carries a red box in the 3D view; nothing else in the scene is red
     red = lambda rgb: (rgb[..., 0] > 150) & (rgb[..., 1] < 90) & (rgb[..., 2] < 90)  # noqa: E731

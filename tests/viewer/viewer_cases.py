@@ -15,6 +15,7 @@ MARKUP_NAME = '<img src=x onerror="window.injected=1">door'
 HINGE, SLIDE, FLAGGED = 3, 4, 2  # the right door, the drawer, the left door
 MOVES_WITH = {HINGE: [3], SLIDE: [4, 5]}  # what each joint carries
 REASON = "penetrates part 1 at q=-1.571"
+WARNING = "limit past contact: hi (stops at q=1.42)"  # a ground-truth style warning on the hinge
 
 
 def box(extents, centre) -> trimesh.Trimesh:
@@ -43,9 +44,9 @@ def cabinet() -> tuple[Structure, dict[int, trimesh.Trimesh]]:
 
 
 def verdict() -> dict:
-    """A physics.json that flags the left door."""
+    """A physics.json that flags the left door and warns on the right one."""
     return {"ok": False, "checks": {"rest": [], "gravity": []},
-            "joints": {"2": {"ok": False, "reasons": [REASON]}, "3": {"ok": True, "reasons": []},
+            "joints": {"2": {"ok": False, "reasons": [REASON]}, "3": {"ok": True, "reasons": [], "warnings": [WARNING]},
                        "4": {"ok": True, "reasons": []}}}
 
 

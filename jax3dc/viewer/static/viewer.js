@@ -185,8 +185,10 @@
     const p = joint.part, check = jointCheck(p.id);
     const flagged = check !== null && !check.ok;
     const row = el("div", { class: "joint" + (flagged ? " flagged" : ""), "data-joint": String(p.id) });
+    const warned = check !== null && check.ok && check.warnings.length > 0;
     const state = check === null ? el("span", { class: "muted" }, "not checked")
-      : flagged ? el("span", { class: "flag" }, "flagged") : el("span", { class: "pass" }, "ok");
+      : flagged ? el("span", { class: "flag" }, "flagged")
+      : warned ? el("span", { class: "warn" }, "ok, with a warning") : el("span", { class: "pass" }, "ok");
     const title = el("div", {}, `${joint.type} of part ${p.id}${p.name ? " " + p.name : ""} · `, state);
     joint.slider = el("input", { type: "range", min: String(joint.lo), max: String(joint.hi),
       step: String((joint.hi - joint.lo) / STEPS || 1), value: String(joint.rest), "aria-label": `joint of part ${p.id}` });
@@ -198,6 +200,11 @@
       const reasons = el("ul", { class: "reasons" });
       for (const r of check.reasons) reasons.append(el("li", {}, r));
       row.append(reasons);
+    }
+    if (check !== null && check.warnings.length > 0) {
+      const warnings = el("ul", { class: "warnings" });
+      for (const w of check.warnings) warnings.append(el("li", {}, w));
+      row.append(warnings);
     }
     joint.slider.addEventListener("input", () => { setJoint(joint, Number(joint.slider.value)); render(); });
     hoverPart(row, [p.id]);
