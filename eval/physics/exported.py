@@ -19,6 +19,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import defusedxml
+import defusedxml.ElementTree as DefusedET
 import numpy as np
 import trimesh
 
@@ -52,12 +54,14 @@ def is_mjcf(path: Path) -> bool:
 
 def load_exported(path: Path, max_part_faces: int) -> ExportedObject:
     """Read the file and its meshes; InputFileError names what is missing or not understood."""
-    try:
-        root = ET.parse(path).getroot()
+    try:  # the file is the user's: no DTD, so no entity expansion
+        root = DefusedET.parse(path, forbid_dtd=True).getroot()
     except OSError as e:
         raise InputFileError(path, f"cannot read: {e.strerror or e}") from None
     except ET.ParseError as e:
         raise InputFileError(path, f"not readable XML: {e}") from None
+    except defusedxml.DefusedXmlException as e:
+        raise InputFileError(path, f"refused XML construct ({type(e).__name__}): an MJCF needs no DTD or entities") from None
     if root.tag != "mujoco":
         raise InputFileError(path, f"not an MJCF file: its root element is <{root.tag}>, not <mujoco>")
     texts = {t.get("name"): t.get("data", "") for t in root.iter("text")}

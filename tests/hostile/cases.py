@@ -331,7 +331,31 @@ def _object_cases(inputs: Path, out: Path) -> list[Case]:
                                                       "--out", str(out / "export_object_faces")), "--max-faces"))
     cases.append(Case("physics check", "part_faces", ("physics", "check", str(pair), "--parts", str(many_parts),
                                                       "--max-part-faces", "1000"), "--max-part-faces"))
+    for name, (text, expect) in _exported_mjcf_files().items():  # physics check reads an exported object.xml
+        cases.append(Case("physics check", f"mjcf_{name}", ("physics", "check", str(_write(folder / f"{name}.xml", text))),
+                          expect))
     return cases
+
+
+def _exported_mjcf_files() -> dict[str, tuple[str, str]]:
+    """name -> (an object.xml given to physics check, words expected in the error)."""
+    laughs = ('<?xml version="1.0"?><!DOCTYPE m [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">'
+              '<!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;">]><mujoco><custom><text name="jax3dc_structure" data="&c;"/>'
+              '</custom></mujoco>')
+    cycle = ('{&quot;materials&quot;:{&quot;0&quot;:{&quot;family&quot;:&quot;Wood&quot;}},&quot;nodes&quot;:{'
+             '&quot;1&quot;:{&quot;parent&quot;:2,&quot;material&quot;:0},&quot;2&quot;:{&quot;parent&quot;:1,'
+             '&quot;material&quot;:0}},&quot;relations&quot;:[]}')
+    texts = '<text name="jax3dc_scale" data="{}"/><text name="jax3dc_mounted" data="false"/>'
+    return {
+        "entities": (laughs, "DTD"),
+        "not_xml": ("<mujoco><worldbody>", "not readable XML"),
+        "foreign": ('<mujoco><worldbody><body><geom type="box" size=".1 .1 .1"/></body></worldbody></mujoco>',
+                    "not a file written by jax3dc export"),
+        "cyclic_structure": (f'<mujoco><custom><text name="jax3dc_structure" data="{cycle}"/>{texts.format(1.0)}'
+                             '</custom><worldbody/></mujoco>', "cycle"),
+        "negative_scale": (f'<mujoco><custom><text name="jax3dc_structure" data="{cycle.replace("2,", "null,", 1)}"/>'
+                           f'{texts.format(-1.0)}</custom><worldbody/></mujoco>', "positive number"),
+    }
 
 
 def _metric_line(key: str = '"a"', structure: str | None = None, boxes: str | None = None) -> str:
