@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 10 / issue 6 scaling figures through the trainer (bench/train_step.py) on one host:
 # the 4B config, random weights, frozen vision tower, 8192 tokens per row, one row per GPU,
-# full remat, cuDNN attention. Layouts that use disjoint GPUs run at the same time.
+# full remat, cuDNN attention. Layouts that use disjoint GPUs run at the same time; on four GPUs:
+# FSDP 4, data 2 x FSDP 2 and FSDP 2 x tensor 2.
 #   bash bench/train_layouts.sh OUT.jsonl [GPUS]     (GPUS: 2, 4 or 8)
 set -uo pipefail
 out=${1:?usage: train_layouts.sh OUT.jsonl [GPUS]}; gpus=${2:-$(nvidia-smi -L | wc -l)}
@@ -11,7 +12,7 @@ step() {  # visible devices, mesh data,fsdp,tensor
     --remat full --attention cudnn --steps 6 --mesh "$2" --json "$out" 2>&1 | grep -E "step_s|mfu|peak|Error" | sed "s/^/[$1 $2] /"
 }
 step 0 1,1,1 & step 1,2 1,2,1 & wait
-if [ "$gpus" -ge 4 ]; then step 0,1,2,3 1,4,1; step 0,1,2,3 1,2,2; fi
+if [ "$gpus" -ge 4 ]; then step 0,1,2,3 1,4,1; step 0,1,2,3 2,2,1; step 0,1,2,3 1,2,2; fi
 if [ "$gpus" -ge 8 ]; then step 0,1,2,3,4,5,6,7 1,8,1; step 0,1,2,3,4,5,6,7 1,4,2; fi
 python3 - "$out" <<'PY'
 import json, sys
