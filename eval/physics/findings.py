@@ -46,6 +46,11 @@ CHECKS = {
 }
 
 
+# Decimals of the floats a verdict file holds: C MuJoCo (float64) and MJX (float32) measure the
+# same depth 3e-8 apart, and 1e-4 nu is far below every tolerance, so both write the same file.
+JSON_DECIMALS = 4
+
+
 @dataclass(frozen=True)
 class Finding:
     """One fault found by one check. Joint values are radians (hinge) or nu (slide)."""
@@ -83,9 +88,11 @@ class Finding:
             value = getattr(self, f.name)
             if value is None or (isinstance(value, tuple) and not value):
                 continue
-            if isinstance(value, float) and not math.isfinite(value):  # a blown-up rollout: JSON has no NaN
-                value = None
-            out[f.name] = [list(s) for s in value] if f.name == "state" else list(value) if isinstance(value, tuple) else value
+            if isinstance(value, float):  # a blown-up rollout: JSON has no NaN
+                value = round(value, JSON_DECIMALS) if math.isfinite(value) else None
+            if f.name == "state":
+                value = [[j, round(v, JSON_DECIMALS)] for j, v in value]
+            out[f.name] = list(value) if isinstance(value, tuple) else value
         return out
 
     @classmethod

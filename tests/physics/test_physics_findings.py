@@ -90,3 +90,11 @@ def test_ground_truth_counts_a_warned_joint_as_flagged_but_not_failing(monkeypat
     obj = ground_truth.GroundTruthObject("safe", None, {}, 1.0)
     counts = ground_truth.false_alarms([obj])
     assert (counts["joints"], counts["flagged"], counts["failing"], counts["objects_failed"]) == (2, 1, 0, [])
+
+
+def test_the_json_form_is_the_same_for_floats_a_backend_apart():
+    """C (float64) and MJX (float32) measured this depth 3e-8 apart; their verdict files agree."""
+    c = Finding("penetration", joints=(2,), parts=(1,), depth=0.13386382328205643, state=((2, 0.90000001),))
+    mjx = Finding("penetration", joints=(2,), parts=(1,), depth=0.13386379182338715, state=((2, 0.9),))
+    assert c != mjx and c.to_json() == mjx.to_json()
+    assert c.to_json()["depth"] == 0.1339 and c.to_json()["state"] == [[2, 0.9]]
