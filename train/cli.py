@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 
 from train.config import TrainConfig, apply_overrides, describe_fields, validate
 
@@ -40,14 +39,12 @@ def _run(args) -> int:
     validate(cfg)  # bad settings (no data, say) stop here: before jax starts or anything is written
 
     from train.distributed import initialize_from_env
+    from jax3dc.compile_cache import use_compile_cache
     from jax3dc.xla_flags import TRAINING_GPU_FLAGS, apply_gpu_defaults
 
     apply_gpu_defaults(TRAINING_GPU_FLAGS)  # before the backend starts
     initialize_from_env()
-    if cfg.compile_cache and "JAX_COMPILATION_CACHE_DIR" not in os.environ:  # the environment's own wins
-        import jax
-
-        jax.config.update("jax_compilation_cache_dir", os.path.expanduser(cfg.compile_cache))
+    use_compile_cache(cfg.compile_cache)
     from train.loop import run
 
     result = run(cfg)

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Sequence
 
 from jax3dc import sharding
+from jax3dc.compile_cache import DEFAULT_DIR as DEFAULT_CACHE_DIR
 from jax3dc.errors import Jax3dcError
 from jax3dc.model.layer_stack import REMAT_POLICIES
 
@@ -98,7 +99,7 @@ class TrainConfig:
     scan_layers: bool = False
     # JAX's persistent compilation cache: a resumed or repeated run loads its compiled step from
     # here instead of compiling again; "" turns it off.
-    compile_cache: str = "~/.cache/jax3dc/xla"
+    compile_cache: str = DEFAULT_CACHE_DIR
     mesh: MeshConfig = field(default_factory=MeshConfig)
     # Rows of the logical -> mesh axes table (jax3dc/sharding.py LOGICAL_RULES) to replace, as
     # "logical=axis[+axis]" ("logical=": replicated), e.g. batch=data+fsdp,vocab=tensor. Parameters,
