@@ -20,14 +20,15 @@ part it runs in, see ``guides``), "pivot detached", "limit unreachable: lo|hi", 
 from __future__ import annotations
 
 import functools
-from typing import Any
+from typing import Any, Callable
 
+import mujoco
 import numpy as np
 import trimesh
 
 from eval.physics import cpu_backend
 from eval.physics.crossing import crossings
-from eval.physics.dynamics import gravity, reachability, tolerated_pairs
+from eval.physics.dynamics import Rollout, gravity, reachability, tolerated_pairs
 from eval.physics.findings import FAILURE, WARNING, Finding, describe
 from eval.physics.floor import first_below_floor
 from eval.physics.guides import carried_out_of_guide, welded
@@ -38,6 +39,8 @@ from eval.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_T
                                      REST_PENETRATION_TOL_NU, LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
 from jax3dc.export.assembly import frames_nu, tree_order
 from jax3dc.structure.schema import Structure
+
+Penetration = Callable[[mujoco.MjModel, np.ndarray], np.ndarray]  # (model, qpos [S, nq]) -> [S, nbody, nbody] distances (m)
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
                  backend: str = "c", dynamics: bool = True, mounted: bool = False,
@@ -56,11 +59,14 @@ def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
 
 def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
                              backend: str = "c", dynamics: bool = True, mounted: bool = False,
-                             threads: int | None = None, pieces: dict[int, list[np.ndarray]] | None = None
+                             threads: int | None = None, pieces: dict[int, list[np.ndarray]] | None = None,
+                             penetration: Penetration | None = None, rollout: Rollout | None = None
                              ) -> tuple[dict[str, Any], dict[int, Any]]:
     """``check_object`` and, per jointed part, (joint values, deepest penetration in nu) over its sweep.
 
     ``threads``: C rollout threads (default: every core; fewer when objects run in parallel processes).
+    ``penetration`` and ``rollout`` replace the backend's own (the MJX sweep sends the kinematic
+    states to its batched device service and keeps the rollouts in C).
     """
     with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
         kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale), pieces)
@@ -68,15 +74,15 @@ def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trim
     proximity = cpu_backend.pair_distances(kinematic.model, states.qpos)
     distances = proximity
     if backend == "mjx":  # MJX has no mesh-mesh margin: it gives penetration, C keeps the proximity check
-        from eval.physics.mjx_backend import mjx_pair_distances
+        if penetration is None:
+            from eval.physics.mjx_batch import padded_pair_distances as penetration
         bare = build_sim_model(structure, parts, scale, SimOptions(), kinematic.pieces)
-        distances = mjx_pair_distances(bare.model, states.qpos)
+        distances = penetration(bare.model, states.qpos)
     found = findings_from(structure, parts, kinematic, states, distances, proximity)
     if dynamics:
-        if backend == "mjx":
-            from eval.physics.mjx_dynamics import mjx_final_qpos
-            rollout = mjx_final_qpos
-        else:
+        if rollout is None and backend == "mjx":
+            from eval.physics.mjx_dynamics import mjx_final_qpos as rollout
+        elif rollout is None:
             rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
         exclude = tolerated_pairs(kinematic, distances, PENETRATION_TOL_NU * scale, states, RECONTACT_DEPTH_NU * scale)
         found += reachability(structure, parts, scale, exclude, kinematic.pieces, rollout)
