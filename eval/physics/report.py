@@ -42,9 +42,11 @@ def _kind(reason: str) -> str:
     return reason.split(" at q=")[0].split(" (")[0]
 
 
-def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], out: Path) -> dict[str, Any]:
-    """Write verdicts.jsonl, summary.json and index.md (linking each result's "plot", a path
-    relative to ``out``, where it has one); return the summary."""
+def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], out: Path,
+                 device: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Write verdicts.jsonl, costs.jsonl (each result's "cost", where it has one), summary.json
+    (with ``device``, what the MJX sweep's accelerator did) and index.md (linking each result's
+    "plot", a path relative to ``out``, where it has one); return the summary."""
     try:
         out.mkdir(parents=True, exist_ok=True)
         joints = [j for r in results for j in r["verdict"]["joints"].values()]
@@ -55,11 +57,17 @@ def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], o
             "joints": len(joints), "joints_ok": sum(j["ok"] for j in joints),
             "reasons": dict(reasons.most_common()), "warnings": dict(warnings.most_common()), "skipped": len(skipped),
         }
+        if device is not None:
+            summary["device"] = device
         with (out / "verdicts.jsonl").open("w", encoding="utf-8") as f:
             for r in results:
                 f.write(json.dumps({"object": r["object"], "category": r["category"], **r["verdict"]}) + "\n")
             for s in skipped:
                 f.write(json.dumps({"object": s["object"], "skipped": s["why"]}) + "\n")
+        with (out / "costs.jsonl").open("w", encoding="utf-8") as f:
+            for r in results:
+                if "cost" in r:
+                    f.write(json.dumps({"object": r["object"], "category": r["category"], **r["cost"]}) + "\n")
         (out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n", encoding="utf-8")
         lines = ["# Physics sweep", "", f"{summary['objects_ok']} / {summary['objects']} objects pass, "
                  f"{summary['joints_ok']} / {summary['joints']} joints pass, {len(skipped)} skipped.", "",

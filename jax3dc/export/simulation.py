@@ -95,13 +95,22 @@ def simulation_mjcf(structure: Structure, parts: dict[int, trimesh.Trimesh], sca
     check_nesting(structure)
     export = assemble(structure, parts, scale)
     if pieces is None:
-        pieces = {p.part_id: convex_pieces(p.mesh, MIN_PIECE_M, scale) for p in export}
+        pieces = _pieces(export, scale)
     exclude = options.exclude
     if exclude is None:
         bare = ModelOptions(visual=False, exclude=frozenset())
         exclude = travel_contacts(SimulationMJCF(*_mjcf(export, pieces, scale, bare, model_name), export, pieces))
     xml, files = _mjcf(export, pieces, scale, dataclasses.replace(options, exclude=exclude), model_name)
     return SimulationMJCF(xml, files, export, pieces)
+
+
+def collision_pieces(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float) -> dict[int, list[np.ndarray]]:
+    """Each part's convex collision pieces (part frame, metres), as ``simulation_mjcf`` decomposes them."""
+    return _pieces(assemble(structure, parts, scale), scale)
+
+
+def _pieces(export: list, scale: float) -> dict[int, list[np.ndarray]]:
+    return {p.part_id: convex_pieces(p.mesh, MIN_PIECE_M, scale) for p in export}
 
 
 def compile_mjcf(xml: str, files: dict[str, bytes]) -> mujoco.MjModel:

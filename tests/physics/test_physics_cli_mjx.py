@@ -142,3 +142,21 @@ def test_cli_sweep_worker_error_is_one_line(tmp_path, capsys):
     (out / "plots").write_text("a file where the plots folder goes")
     assert main(["physics", "sweep", str(build), "--out", str(out), "--workers", "2"]) == 1
     assert "plots/microwave_000000.png: cannot write the plot" in capsys.readouterr().err
+
+
+def test_cli_sweep_on_mjx_writes_the_c_verdicts(tmp_path):
+    """``physics sweep --backend mjx``: worker processes send their states to the batched device
+    check in the main process; the verdicts file is the C backend's, and the summary says what the
+    device did (launches, compiles)."""
+    build = _sweep_build(tmp_path / "build")
+    c, mjx = tmp_path / "c", tmp_path / "mjx"
+    assert main(["physics", "sweep", str(build), "--out", str(c)]) == 0
+    assert main(["physics", "sweep", str(build), "--out", str(mjx), "--backend", "mjx", "--workers", "2",
+                 "--compile-cache", ""]) == 0
+    assert (mjx / "verdicts.jsonl").read_text() == (c / "verdicts.jsonl").read_text()
+    device = json.loads((mjx / "summary.json").read_text())["device"]
+    assert device["objects"] == 2 and 1 <= device["launches"] <= 2 and device["compiles"] >= 2
+    assert device["states"] > 2 and device["shapes"]["objects"] == 16
+    costs = [json.loads(line) for line in (mjx / "costs.jsonl").read_text().splitlines()]
+    assert {c["object"] for c in costs} == {"microwave_000000", "laptop_000000"}
+    assert all(c["seconds"] > 0 and c["pieces"] >= c["parts"] >= 2 for c in costs)
