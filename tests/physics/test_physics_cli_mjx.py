@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -151,8 +155,11 @@ def test_cli_sweep_on_mjx_writes_the_c_verdicts(tmp_path):
     build = _sweep_build(tmp_path / "build")
     c, mjx = tmp_path / "c", tmp_path / "mjx"
     assert main(["physics", "sweep", str(build), "--out", str(c)]) == 0
-    assert main(["physics", "sweep", str(build), "--out", str(mjx), "--backend", "mjx", "--workers", "2",
-                 "--compile-cache", ""]) == 0
+    # its own process: the device service's arrays stay out of the test runner's memory
+    subprocess.run([sys.executable, "-m", "jax3dc.cli", "physics", "sweep", str(build), "--out", str(mjx), "--backend", "mjx",
+                    "--workers", "2", "--compile-cache", ""], check=True, cwd=Path(__file__).resolve().parents[2],
+                   env={**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(Path(__file__).resolve().parents[2]),
+                                                                      os.environ.get("PYTHONPATH")]))}, capture_output=True)
     assert (mjx / "verdicts.jsonl").read_text() == (c / "verdicts.jsonl").read_text()
     device = json.loads((mjx / "summary.json").read_text())["device"]
     assert device["objects"] == 2 and 1 <= device["launches"] <= 2 and device["compiles"] >= 2
