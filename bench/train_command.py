@@ -42,15 +42,18 @@ def run_train(a: argparse.Namespace, out_dir: str) -> tuple[dict, float]:
     wall = time.perf_counter() - started
     rows = [json.loads(line) for line in open(os.path.join(out_dir, "metrics.jsonl"))]
     train = [r for r in rows if r.get("kind", "train") == "train"]
-    compile_s = next(r["compile_s"] for r in train if "compile_s" in r)
+    first = next(r for r in train if "compile_s" in r)
+    compile_s = first["compile_s"]
     timed = [r for r in train if "tokens_per_s" in r][1:]  # the first interval warms the loader up
     if not timed:
         raise SystemExit(f"{out_dir}/metrics.jsonl: fewer than two logged intervals; raise --steps")
     median = lambda k: float(np.median([r[k] for r in timed]))  # noqa: E731
-    summary = {"compile_s": compile_s, "tokens_per_s": median("tokens_per_s"),
+    summary = {"compile_s": compile_s, **{k: first[k] for k in ("trace_s", "lower_s", "xla_s", "compiles") if k in first},
+               "tokens_per_s": median("tokens_per_s"),
                "mfu_vs_989": median("mfu") if "mfu" in timed[0] else None,
                "data_wait_frac": median("data_wait_frac"), "final_loss": train[-1].get("loss"),
                "interval_tokens_per_s": [r["tokens_per_s"] for r in timed],
+               "save_blocked_s": [round(r["save_s"], 2) for r in train if "save_s" in r],
                "losses": {r["step"]: r["loss"] for r in train if "loss" in r}}
     if summary["mfu_vs_989"] is not None:
         summary["mfu_vs_790"] = summary["mfu_vs_989"] * PEAK_DATASHEET / PEAK_MEASURED_BF16

@@ -57,9 +57,14 @@ def main() -> None:
     trainer = Trainer(cfg, attention_impl=a.attention)
     loader = make_loader(cfg, trainer.model.config, "train", padding=False)
     batches = [next(loader) for _ in range(2)]
+    from jax3dc.compilation import CompileClock
+
+    clock, first = CompileClock(), time.perf_counter()
     for i in range(2):  # compile + warm-up
         to_host(trainer.train_step(batches[i % 2])["loss"])
     compiled = time.perf_counter()
+    compile_cost = {"first_steps_s": compiled - first, **clock.elapsed()}
+    print("compile: " + "  ".join(f"{k} {v:.1f}" for k, v in compile_cost.items()))
     t0 = time.perf_counter()
     for i in range(a.steps):
         m = trainer.train_step(batches[i % 2])
@@ -90,7 +95,8 @@ def main() -> None:
                "preset": a.preset, "batch": a.batch, "seq": a.seq, "remat": a.remat, "scan": a.scan, "lora_rank": a.lora_rank, "step_s": dt,
                "tokens_per_s": a.batch * a.seq / dt, "tokens_per_s_per_device": a.batch * a.seq / dt / jax.device_count(),
                "mfu_vs_989": flops / 989e12 / jax.device_count(), "peak_mem_gib": max(peaks),
-               "setup_and_compile_s": compiled - started}
+               "setup_and_compile_s": compiled - started, "compile": compile_cost,
+               "xla_flags": os.environ.get("XLA_FLAGS", "")}
         with open(a.json, "a") as f:
             f.write(json.dumps(row) + "\n")
 

@@ -39,7 +39,7 @@ def _run(args) -> int:
     validate(cfg)  # bad settings (no data, say) stop here: before jax starts or anything is written
 
     from train.distributed import initialize_from_env
-    from jax3dc.compile_cache import use_compile_cache
+    from jax3dc.compilation import use_compile_cache
     from jax3dc.xla_flags import TRAINING_GPU_FLAGS, apply_gpu_defaults
 
     apply_gpu_defaults(TRAINING_GPU_FLAGS)  # before the backend starts

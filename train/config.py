@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Sequence
 
 from jax3dc import sharding
-from jax3dc.compile_cache import DEFAULT_DIR as DEFAULT_CACHE_DIR
+from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR
 from jax3dc.errors import Jax3dcError
 from jax3dc.model.layer_stack import REMAT_POLICIES
 

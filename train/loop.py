@@ -23,6 +23,7 @@ import optax
 from jax.sharding import Mesh
 
 from jax3dc import sharding
+from jax3dc.compilation import CompileClock
 from jax3dc.errors import Jax3dcError
 from train import model_state
 from train.batch import check_batch
@@ -179,9 +180,10 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
     peak = peak_flops(jax.devices()[0].device_kind)
     tokens_per_step = cfg.batch_size * cfg.seq_len
     last_loss = math.nan
-    timer, timed_steps, wait_s = None, 0, 0.0
+    timer, timed_steps, wait_s, save_s = None, 0, 0.0, 0.0
     deadline = time.monotonic() + 60 * cfg.time_limit_min if cfg.time_limit_min else None
     step = start
+    clock = CompileClock()
     started = time.perf_counter()
     try:
         for step in range(start + 1, cfg.steps + 1):
@@ -208,8 +210,9 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                         f"have turned non-finite a few steps before); stopped without saving it. Last good checkpoint: "
                         f"{'step %d in %s' % (good, ckpt.directory) if good else 'none'}")
                 last_loss = values["loss"]
-            if first:  # the first step compiles: log its time, and time the rest from its end
+            if first:  # the first step compiles: log its time and where it went, and time the rest from its end
                 values["compile_s"] = time.perf_counter() - started - wait_s
+                values.update(clock.elapsed())  # trace_s, lower_s, xla_s, compiles, cache_hits
                 timer, wait_s, logging = time.perf_counter(), 0.0, True
             else:
                 timed_steps += 1
@@ -221,7 +224,9 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                     if peak:
                         values["mfu"] = flops.step_flops(cfg.batch_size, cfg.seq_len) / dt / (peak * jax.device_count())
                     timer, timed_steps = time.perf_counter(), 0
-                wait_s = 0.0
+                if save_s:
+                    values["save_s"] = save_s
+                wait_s = save_s = 0.0
                 values.update({f"skipped_{k}": float(v) for k, v in getattr(loader, "skipped", {}).items()})
                 log.write(step, values)
             val_loss = None
@@ -229,8 +234,10 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                 val_loss = trainer.validate(make_loader(cfg, trainer.model.config, "val", trainer.tokenizer, trainer.processor), cfg.eval_batches)
                 best_val = val_loss if best_val is None else min(best_val, val_loss)
                 log.write(step, {"loss": val_loss}, kind="val")
-            if saving:
+            if saving:  # asynchronous: save_s is how long the run waited (the copy off the device)
+                saved = time.perf_counter()
                 trainer.save(ckpt, loader, val_loss, best_val)
+                save_s += time.perf_counter() - saved
             log.advance()
             if on_step is not None:
                 on_step(step, values)

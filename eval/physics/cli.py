@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from jax3dc.cli import command_group, positive_int
-from jax3dc.compile_cache import DEFAULT_DIR as DEFAULT_CACHE_DIR
+from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR
 from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES
 
@@ -180,7 +180,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         context = mp.get_context("spawn")  # spawned: a forked child would inherit the loader's threads and locks
         if args.backend == "mjx":
             from eval.physics.mjx_service import DeviceService, init_worker
-            from jax3dc.compile_cache import use_compile_cache
+            from jax3dc.compilation import use_compile_cache
 
             use_compile_cache(args.compile_cache)
             device = DeviceService(context, args.workers)

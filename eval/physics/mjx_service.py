@@ -26,7 +26,6 @@ import numpy as np
 # bodies and 1,536 geom pairs an object), so that the shapes seldom grow and recompile.
 SWEEP_START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=2048, hulls=(64, 384),
                           hull_sizes=((8, 12, 12), (32, 64, 96)))
-COMPILE_EVENT = "/jax/core/compile/backend_compile_duration"  # jax.monitoring's event for one XLA compile
 
 
 @dataclass
@@ -41,13 +40,6 @@ class ServiceStats:
     compile_s: float = 0.0
     phases: dict[str, float] = field(default_factory=dict)  # seconds per phase of the launches (mjx_batch)
     shapes: object = None  # the shapes the last launch was padded to
-    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
-
-    def on_compile(self, event: str, seconds: float, **_) -> None:
-        if event == COMPILE_EVENT:
-            with self._lock:
-                self.compiles += 1
-                self.compile_s += seconds
 
     def to_json(self) -> dict[str, float]:
         return {"launches": self.launches, "objects": self.objects, "states": self.items,
@@ -71,11 +63,10 @@ class DeviceService:
         return self.requests, self.replies, self.next_worker
 
     def serve(self, stop: threading.Event) -> None:
-        import jax
-
         from eval.physics.mjx_batch import Shapes, batch_pair_distances
+        from jax3dc.compilation import CompileClock
 
-        jax.monitoring.register_event_duration_secs_listener(self.stats.on_compile)
+        clock = CompileClock()
         # the largest met so far: every launch is padded to it, so compiles happen only as it grows
         shapes = Shapes(**SWEEP_START_SHAPES)
         self.stats.shapes = shapes
@@ -101,6 +92,8 @@ class DeviceService:
             self.stats.objects += len(batch)
             self.stats.items += sum(len(q) for _, _, q in batch)
             self.stats.device_s += time.perf_counter() - start
+            compiled = clock.elapsed()
+            self.stats.compiles, self.stats.compile_s = int(compiled["compiles"]), compiled["xla_s"]
             for (worker, _, _), result in zip(batch, results):
                 self.replies[worker].put(result)
 
