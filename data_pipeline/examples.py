@@ -23,7 +23,9 @@ from jax3dc.errors import Jax3dcError
 from jax3dc.processing.chat import encode_chat
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images
 from jax3dc.processing.tokenizer import Tokenizer
-from jax3dc.prompt import chat_messages, code_messages
+from jax3dc.errors import StructureError
+from jax3dc.prompt import chat_messages, code_messages, legend_boxes
+from jax3dc.structure.box_frame import PivotFrame, target_in_frame
 
 TASKS = ("structure", "code")
 IMAGES_PER_TASK = {"structure": 2, "code": 1}  # I and S; I alone
@@ -50,6 +52,7 @@ class ExampleEncoder:
     merge: int
     task: str = "structure"
     image_size: int | None = None  # resize I and S to this square side first (S nearest-neighbour)
+    pivot_frame: PivotFrame = PivotFrame()  # how the structure target writes joint pivots
 
     @property
     def images_per_example(self) -> int:
@@ -72,7 +75,11 @@ class ExampleEncoder:
 
     def messages(self, record: Record) -> list[dict]:
         if self.task == "structure":
-            return chat_messages(record.prompt, record.target)
+            try:
+                target = target_in_frame(record.target, legend_boxes(record.prompt), self.pivot_frame)
+            except StructureError as e:
+                raise UnusableRecord(f"record {record.key!r}: target is not a valid structure: {e}") from None
+            return chat_messages(record.prompt, target)
         if not record.program:
             raise MissingProgram(f"record {record.key!r} has no part program (code task)")
         return code_messages(record.program)

@@ -33,6 +33,7 @@ from jax3dc.errors import Jax3dcError
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.processing.processor import ImageProcessorConfig, smart_resize
 from jax3dc.processing.tokenizer import Tokenizer
+from jax3dc.structure.box_frame import PivotFrame
 
 log = logging.getLogger(__name__)
 
@@ -63,6 +64,7 @@ class LoaderConfig:
     worker_buffer: int = 2  # batches each worker prepares ahead
     process_index: int = 0
     process_count: int = 1
+    pivot_frame: PivotFrame = PivotFrame()  # how structure targets write joint pivots
 
 
 @dataclass(frozen=True)
@@ -239,7 +241,7 @@ def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
         raise LoaderError(f"process {cfg.process_index} of {cfg.process_count}")
     layout = row_layout(cfg, model, tokenizer, processor)
     sources, lengths = zip(*(_source(shard_paths([s], cfg.split), cfg) for s in cfg.sources))
-    decoded = [ds.map(_Decode(ExampleEncoder(tokenizer, processor, layout.merge, task, cfg.image_size), cfg.split))
+    decoded = [ds.map(_Decode(ExampleEncoder(tokenizer, processor, layout.merge, task, cfg.image_size, cfg.pivot_frame), cfg.split))
                for ds, task in zip(sources, tasks)]
     examples = decoded[0] if len(decoded) == 1 else grain.MapDataset.mix(decoded, list(cfg.weights) or None)
     named = ", ".join(s if len(set(tasks)) == 1 else f"{s} ({t})" for s, t in zip(cfg.sources, tasks))

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import io
 import json
-import re
 import sys
 import time
 from dataclasses import dataclass
@@ -46,11 +45,9 @@ from jax3dc.generate import GenerationConfig, decode, left_pad, prefill, repeat_
 from jax3dc.model.params import load_pretrained
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images, smart_resize
 from jax3dc.processing.tokenizer import load_tokenizer
-from jax3dc.prompt import chat_messages, code_messages
+from jax3dc.prompt import chat_messages, code_messages, legend_boxes
 from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
-
-# A legend line of the SPEC §3 prompt: "id: #rrggbb | cx cy cz | ex ey ez".
-_LEGEND = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \| (\S+) (\S+) (\S+) \| (\S+) (\S+) (\S+)$", re.MULTILINE)
+from jax3dc.structure.box_frame import PivotFrame, text_to_absolute
 
 
 def read_records(paths: Iterable[Path], split: str | None = None) -> Iterator[Record]:
@@ -72,10 +69,7 @@ def record_boxes(record: Record) -> dict[int, Box]:
     """Per-part boxes from meta["boxes"], else from the prompt's legend (the same numbers)."""
     if "boxes" in record.meta:
         return boxes_from_dict(record.meta["boxes"])
-    boxes = {
-        int(m[1]): Box(tuple(float(v) for v in m.groups()[1:4]), tuple(float(v) for v in m.groups()[4:7]))
-        for m in _LEGEND.finditer(record.prompt)
-    }
+    boxes = legend_boxes(record.prompt)
     if not boxes:
         raise StructureError("box_value", record.key, "record has no meta.boxes and no part legend in its prompt")
     return boxes
@@ -157,12 +151,14 @@ class Prompt:
 
 @dataclass(frozen=True)
 class Generator:
-    """A loaded checkpoint: model, its config, tokenizer and image processor settings."""
+    """A loaded checkpoint: model, its config, tokenizer and image processor settings, and how it
+    writes pivots (its texts are returned with SPEC §2 absolute pivots whatever that is)."""
 
     model: Any
     config: Any
     tokenizer: Any
     processor: Any
+    pivot_frame: PivotFrame = PivotFrame()
 
     @classmethod
     def load(cls, checkpoint: str | Path, dtype: str = "bfloat16") -> "Generator":
@@ -182,7 +178,7 @@ class Generator:
         else:
             print(f"note: no preprocessor_config.json in {checkpoint}; using Qwen3-VL's image settings", file=sys.stderr)
             processor = ImageProcessorConfig.qwen3_vl()
-        return cls(model, config, tokenizer, processor)
+        return cls(model, config, tokenizer, processor, PivotFrame.load(checkpoint))
 
     def images(self, record: Record, task: str = "structure") -> list:
         """I and S for the structure task, I alone for the code task."""
@@ -239,8 +235,11 @@ class Generator:
 
         def sample(i: int) -> Sample:
             n = int(lengths[i])
-            return Sample(self.tokenizer.decode(tokens[i, :n].tolist()), n,
-                          bool(n) and int(tokens[i, n - 1]) in special.stop_ids, float(logprobs[i]))
+            text = self.tokenizer.decode(tokens[i, :n].tolist())
+            prompt = rows[i // k]
+            if prompt.task == "structure":
+                text = text_to_absolute(text, legend_boxes(prompt.record.prompt), self.pivot_frame)
+            return Sample(text, n, bool(n) and int(tokens[i, n - 1]) in special.stop_ids, float(logprobs[i]))
 
         return [[sample(r * k + c) for c in range(k)] for r in range(len(prompts))]
 

@@ -8,6 +8,7 @@ processor's ``apply_chat_template`` accepts (images I then S, then the text, in 
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 
 import numpy as np
@@ -16,6 +17,7 @@ from jax3dc.palette import BACKGROUND_RGB, hex_colour, part_colour
 from jax3dc.structure.schema import FAMILIES, JOINT_TYPES, PLANES, Box
 
 LEGEND_HEADER = "Parts (id: colour | centroid | extent):"
+_LEGEND_LINE = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \| (\S+) (\S+) (\S+) \| (\S+) (\S+) (\S+)$", re.MULTILINE)
 
 INTRO = (
     "The first image shows an object (or a scene). The second image is its part segmentation: "
@@ -49,6 +51,19 @@ def legend_line(part_id: int, colour: tuple[int, int, int], box: Box) -> str:
     centroid = " ".join(_fixed3(v) for v in box.centroid)
     extent = " ".join(_fixed3(v) for v in box.extent)
     return f"{part_id}: {hex_colour(colour)} | {centroid} | {extent}"
+
+
+def legend_boxes(prompt_text: str) -> dict[int, Box]:
+    """The part boxes a prompt's legend states, by part id: what a model reads, to 3 decimals, and
+    so what box-frame pivots are measured against both in training and at inference."""
+    out: dict[int, Box] = {}
+    for m in _LEGEND_LINE.finditer(prompt_text):
+        try:
+            values = [float(v) for v in m.groups()[1:]]
+        except ValueError:
+            continue
+        out[int(m[1])] = Box(tuple(values[:3]), tuple(values[3:]))  # type: ignore[arg-type]
+    return out
 
 
 def build_prompt(boxes: Mapping[int, Box], palette: np.ndarray, num_joints: int | None) -> str:

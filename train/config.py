@@ -57,6 +57,10 @@ class TrainConfig:
     # One task per data folder (the same folder may be named twice, once per task): one model
     # learns both stages; empty: `task` for every folder.
     data_tasks: tuple[str, ...] = ()
+    # How the structure task writes joint pivots (jax3dc/structure/box_frame.py): "absolute" (SPEC §2
+    # numbers) or "box" (fractions of the moving part's box); empty: the init checkpoint's, else absolute.
+    # The exported model folder records it, so generation reads its pivots back the same way.
+    pivot_frame: str = ""
     tokenizer: str = ""  # folder with tokenizer.json; empty: the init checkpoint's, else Qwen3's
     pack: int = 6  # examples packed per row at most (1: one padded example per row); ~1.5k tokens each at 448 px
     loader_workers: int = 0  # grain worker processes decoding and packing

@@ -17,6 +17,7 @@ import jax
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.processing.processor import ImageProcessorConfig
 from jax3dc.processing.tokenizer import Tokenizer, load_tokenizer
+from jax3dc.structure.box_frame import PivotFrame
 from train.batch import ImageLayout, SyntheticBatches
 from train.config import ConfigError, TrainConfig, require_data
 
@@ -58,6 +59,16 @@ def _synthetic(cfg: TrainConfig, model: Qwen3VLConfig, split: str, padding: bool
                             padding=padding)
 
 
+def run_pivot_frame(cfg: TrainConfig) -> PivotFrame:
+    """cfg.pivot_frame, else the frame the init checkpoint was trained with, else absolute."""
+    if cfg.pivot_frame:
+        try:
+            return PivotFrame(cfg.pivot_frame)
+        except ValueError as e:
+            raise ConfigError(f"--set pivot_frame={cfg.pivot_frame}: {e}") from None
+    return PivotFrame.load(cfg.init) if os.path.isdir(cfg.init) else PivotFrame()
+
+
 def make_loader(cfg: TrainConfig, model: Qwen3VLConfig, split: str, tokenizer: Tokenizer | None = None,
                 processor: ImageProcessorConfig | None = None, padding: bool = True) -> Iterator:
     """This process's loader for `split` ('train' or 'val')."""
@@ -76,5 +87,5 @@ def make_loader(cfg: TrainConfig, model: Qwen3VLConfig, split: str, tokenizer: T
         tasks=cfg.data_tasks if sources == cfg.data else (),
         weights=cfg.data_weights if sources == cfg.data else (), pack=cfg.pack, image_size=cfg.image_size,
         pixel_dtype="bfloat16" if cfg.compute_dtype == "bfloat16" else "float32", seed=cfg.seed, shuffle=train, workers=cfg.loader_workers if train else 0,
-        process_index=jax.process_index(), process_count=jax.process_count())
+        process_index=jax.process_index(), process_count=jax.process_count(), pivot_frame=run_pivot_frame(cfg))
     return ShardLoader.create(loader_cfg, model, tokenizer or run_tokenizer(cfg), processor or run_processor(cfg, model))

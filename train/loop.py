@@ -29,7 +29,7 @@ from train import model_state
 from train.batch import check_batch
 from train.checkpoint import RunCheckpoints
 from train.config import TrainConfig, sharding_rules, to_json, validate
-from train.data import make_loader, run_processor, run_tokenizer
+from train.data import make_loader, run_pivot_frame, run_processor, run_tokenizer
 from train.metrics_log import FlopsModel, MetricsLog, peak_flops, plot_losses
 from train.optimizer import build_optimizer, learning_rate
 from train.parallel import batch_sharding, build_mesh, global_batch, replicated, to_host
@@ -139,7 +139,8 @@ class Trainer:
     def export(self, directory: str) -> None:
         """Every process calls this: the export gathers each tensor collectively; process 0 writes."""
         self.model.trainable = self.state.params
-        model_state.export_hf(self.model, directory, self.tokenizer, self.processor)
+        model_state.export_hf(self.model, directory, self.tokenizer, self.processor,
+                               run_pivot_frame(self.cfg))
         self.model.trainable = None
 
     def flops_model(self) -> FlopsModel:

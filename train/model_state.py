@@ -134,7 +134,7 @@ def _load_hf(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None) -> Qwen3V
     return model
 
 
-def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None) -> None:
+def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None, pivot_frame=None) -> None:
     """Write the model as an HF directory (safetensors + config.json, and the tokenizer and
     image-processor files the run used, so generation encodes prompts exactly as training did).
     LoRA adapters are merged into their kernels: the directory holds a plain model.
@@ -152,6 +152,8 @@ def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None)
         tokenizer.save_pretrained(directory, chat_template=VL_CHAT_TEMPLATE)
     if processor is not None:
         processor.save_pretrained(directory)
+    if pivot_frame is not None and pivot_frame.name != "absolute":
+        pivot_frame.save(directory)
 
 
 def count_params(tree: Any) -> int:
