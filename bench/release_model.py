@@ -11,9 +11,10 @@ from its orbax checkpoint in OUT/train):
                vocabulary, and so its embedding table, stays small enough to ship)
   3. train     `jax3dc train --init release` from scratch, every parameter trained, the
                procedural build mixed with --real (imported real objects, train split only)
-  4. evaluate  `jax3dc eval run` on the procedural test split and on --fixtures (real objects
-               kept out of training), `jax3dc eval baselines` on the same references; with
-               --code-weight, `jax3dc eval run --task code` on the procedural test split too
+  4. evaluate  `bench.real_objects`: the procedural test split (plain, split and merge variants,
+               scenes), --heldout and --fixtures (real objects kept out of training), each beside
+               the no-training baselines and --compare; with --code-weight, `jax3dc eval run
+               --task code` on the procedural test split too
   5. package   the weights in bf16, sharded below 16 MiB a file, with the tokenizer, processor
                config and a model card, in OUT/release (what `jax3dc/release/` ships)
 `--code-weight W` makes one model serve both stages: a share W of training examples are the code
@@ -33,6 +34,7 @@ import shutil
 import time
 from pathlib import Path
 
+from bench import real_objects
 from jax3dc.cli import main as jax3dc
 
 COLUMNS = ("parse", "parent_acc", "edge_f1", "presence_f1", "type_acc", "axis_acc", "pos_err", "range_iou",
@@ -61,29 +63,6 @@ def _last_step(train_dir: Path) -> int:
 
 def _row(metrics: dict) -> dict:
     return {k: metrics.get(k) for k in COLUMNS}
-
-
-def _table(rows: dict[str, dict]) -> str:
-    lines = ["| system | " + " | ".join(COLUMNS) + " |", "|---" * (len(COLUMNS) + 1) + "|"]
-    for name, row in rows.items():
-        cells = ["-" if row.get(k) is None else (f"{row[k]:.3f}" if k == "pos_err" else f"{row[k]:.1f}")
-                 for k in COLUMNS]
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def _evaluate(model: Path, data: list[str], split: str, out: Path, limit: int, batch: int, max_new: int) -> dict:
-    """eval run + baselines on the same references; returns {system: metrics}."""
-    if not (out / "metrics.json").exists():
-        _call(["eval", "run", "--checkpoint", str(model), "--data", *data, "--split", split, "--limit", str(limit),
-               "--batch-size", str(batch), "--bucket", "256", "--max-new-tokens", str(max_new), "--out", str(out),
-               "--overlays", "8"])
-    if not (out / "baselines" / "heuristic" / "metrics.json").exists():
-        _call(["eval", "baselines", "--ref", str(out / "references.jsonl"), "--out", str(out / "baselines")])
-    rows = {"model": json.loads((out / "metrics.json").read_text())}
-    for name in ("star", "heuristic"):
-        rows[name] = json.loads((out / "baselines" / name / "metrics.json").read_text())
-    return rows
 
 
 def _evaluate_code(model: Path, data: str, out: Path, limit: int, batch: int, max_new: int) -> dict:
@@ -126,6 +105,11 @@ def main() -> None:
     p.add_argument("--vocab", type=int, default=2048)
     p.add_argument("--real", default="", help="shards of imported real training objects (train split)")
     p.add_argument("--real-weight", type=float, default=0.1, help="share of training examples from --real")
+    p.add_argument("--heldout", default="", help="shards of the real pool's held-out fifth (bench.real_split), never "
+                   "trained on, scored by bench.real_objects")
+    p.add_argument("--pivot-frame", default="box", choices=("box", "absolute"),
+                   help="how the model writes joint pivots (jax3dc/structure/box_frame.py); ignored with --init DIR, "
+                   "which keeps that model's")
     p.add_argument("--code-weight", type=float, default=0.0,
                    help="share of training examples that are the code task (I -> part program); 0: structure only")
     p.add_argument("--code-eval-records", type=int, default=100, help="procedural test records for the code task")
@@ -137,7 +121,7 @@ def main() -> None:
     p.add_argument("--lr", type=float, default=1e-3)
     p.add_argument("--eval-records", type=int, default=400)
     p.add_argument("--eval-batch", type=int, default=100)
-    p.add_argument("--max-new-tokens", type=int, default=1536)
+    p.add_argument("--max-new-tokens", type=int, default=2048)
     p.add_argument("--reserve-min", type=float, default=2.5, help="minutes kept for evaluation and packaging")
     p.add_argument("--set", action="append", default=[], help="extra `jax3dc train --set` overrides")
     a = p.parse_args()
@@ -182,7 +166,8 @@ def main() -> None:
                      f"batch_size={a.batch}", "grad_accum=1", f"lr={a.lr}", f"warmup_steps={min(200, a.steps // 20)}",
                      f"steps={a.steps}", f"time_limit_min={minutes:.2f}", "freeze=", f"loader_workers={int(workers) - 2}",
                      "eval_every=500", "eval_batches=2", "save_every=500", "log_every=50", "keep_last=1",
-                     f"tokenizer={tok if a.tokenizer or init_dir is None else init_dir}", *a.set]
+                     f"tokenizer={tok if a.tokenizer or init_dir is None else init_dir}",
+                     *([f"pivot_frame={a.pivot_frame}"] if init_dir is None else []), *a.set]
         if len(datasets) > 1:
             overrides.append("data_weights=" + ",".join(f"{w:g}" for w in weights))
             overrides.append("data_tasks=" + ",".join(tasks))
@@ -194,26 +179,22 @@ def main() -> None:
     release = out / "release"
     if not (release / "config.json").exists():
         _package(train_dir, release)
-    results = {"procedural": _evaluate(release, [str(data)], "test", out / "eval_procedural", a.eval_records,
-                                       a.eval_batch, a.max_new_tokens)}
-    if a.compare:
-        results["procedural_compare"] = _evaluate(Path(a.compare), [str(data)], "test", out / "eval_procedural_compare",
-                                                  a.eval_records, a.eval_batch, a.max_new_tokens)
-    if a.fixtures:
-        results["real_fixtures"] = _evaluate(release, a.fixtures.split(","), "test", out / "eval_fixtures", 0,
-                                             a.eval_batch, a.max_new_tokens)
+    bench = real_objects.main(["--model", str(release), *(["--compare", a.compare] if a.compare else []),
+                               *(["--heldout", a.heldout] if a.heldout else []),
+                               *(["--fixtures", a.fixtures] if a.fixtures else []), "--procedural", str(data),
+                               "--out", str(out / "bench"), "--plain", str(a.eval_records),
+                               "--batch", str(a.eval_batch), "--max-new-tokens", str(a.max_new_tokens)])
     code = None
     if a.code_weight:
         code = _evaluate_code(release, str(data), out / "eval_code", a.code_eval_records, a.eval_batch, 2048)
     steps = [json.loads(line) for line in (train_dir / "metrics.jsonl").read_text().splitlines() if line.strip()]
     train_rows = [r for r in steps if r.get("kind") == "train"]
     summary = {"args": vars(a), "final_step": _last_step(train_dir), "last_train": train_rows[-1] if train_rows else None,
-               "results": {split: {name: _row(m) for name, m in rows.items()} for split, rows in results.items()},
-               "counts": {split: rows["model"]["counts"] for split, rows in results.items()}, "code": code}
+               "results": {name: {system: {**_row(r["metrics"]), "hinge_edge_acc": r.get("hinge_edge_acc"),
+                                           "counts": r["metrics"]["counts"]} for system, r in systems.items()}
+                           for name, systems in bench.items()}, "code": code}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     shutil.copy2(out / "summary.json", release / "release_summary.json")
-    for split, rows in results.items():
-        print(f"\n## {split}\n" + _table({k: _row(v) for k, v in rows.items()}), flush=True)
     if code:
         print("\n## code task (procedural test)\n" + json.dumps(code, indent=1), flush=True)
 
