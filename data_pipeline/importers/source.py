@@ -9,7 +9,7 @@ from data_pipeline.importers.assemble import ImportedObject, assemble
 from data_pipeline.importers.frames import FRONTS
 from data_pipeline.importers.limits import ImportLimits
 from data_pipeline.importers.mjcf import read_mjcf
-from data_pipeline.importers.urdf import parse_xml
+from data_pipeline.importers.safe_xml import parse_xml
 from data_pipeline.importers.urdf import read_urdf
 from jax3dc.errors import InputFileError
 

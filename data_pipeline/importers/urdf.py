@@ -16,6 +16,9 @@ reason; a link whose every piece is dropped is an error naming the link, since i
 without that part would silently change its structure. A flat piece is kept: a link's pieces are
 merged into one part mesh before any simulator sees them, and PartNet-Mobility models whole parts
 (door_8877's door) as one flat mesh.
+
+Mesh files are read relative to the URDF's folder, or, for ROS ``package://<pkg>/...`` URIs, within
+the package ``<pkg>`` found at or above that folder (see ``ros_package``).
 """
 
 from __future__ import annotations
@@ -23,11 +26,8 @@ from __future__ import annotations
 import math
 import re
 import xml.etree.ElementTree as ET
-import xml.parsers.expat as expat
 from pathlib import Path
 
-import defusedxml
-import defusedxml.ElementTree as DefusedET
 import numpy as np
 from tqdm import tqdm
 
@@ -35,36 +35,13 @@ from data_pipeline.importers import meshes
 from data_pipeline.importers.frames import pose, rpy_matrix, scaling
 from data_pipeline.importers.kinematic_tree import Edge, KinematicTree, Link, Motion
 from data_pipeline.importers.limits import FaceBudget, ImportLimits, inside_folder
+from data_pipeline.importers.ros_package import PACKAGE_PREFIX, PackageResolver
+from data_pipeline.importers.safe_xml import parse_xml
 from jax3dc.errors import InputFileError
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 HINGE_LIMIT = 2 * math.pi  # SPEC §2: hinge ranges lie within [-2pi, 2pi]
 MOVING_SEMANTICS = {"hinge": ("revolute", "continuous"), "slider": ("prismatic",)}
-
-
-def parse_xml(path: Path, root_tag: str | None = None) -> ET.Element:
-    """Parse an untrusted URDF/MJCF file with defusedxml; every failure is one InputFileError line.
-
-    Files come from datasets and the web, so any DOCTYPE is refused (``forbid_dtd``), and with it
-    internal entities (billion laughs) and external ones (file disclosure). If ``root_tag`` is
-    given, the root element must have it. The MJCF reader and the format sniffing use this too.
-    """
-    try:
-        data = Path(path).read_bytes()
-    except OSError as e:
-        raise InputFileError(path, f"cannot read file: {e.strerror or e}") from None
-    try:
-        root = DefusedET.fromstring(data, forbid_dtd=True)
-    except defusedxml.DefusedXmlException as e:
-        raise InputFileError(path, f"DOCTYPE/ENTITY declarations are not accepted ({type(e).__name__})") from None
-    except ET.ParseError as e:
-        line, column = e.position
-        raise InputFileError(
-            path, f"malformed XML at line {line}, column {column}: {expat.ErrorString(e.code)}"
-        ) from None
-    if root_tag is not None and root.tag != root_tag:
-        raise InputFileError(path, f"root element is <{root.tag}>, expected <{root_tag}>")
-    return root
 
 
 def _numbers(path: Path, where: str, text: str | None, count: int, default: tuple[float, ...] | None):
@@ -104,19 +81,17 @@ def read_semantics(path: Path) -> dict[str, tuple[str, str]]:
 
 
 def _mesh_path(urdf: Path, filename: str) -> Path:
-    for prefix in ("file://",):
-        if filename.startswith(prefix):
-            return Path(filename[len(prefix):])
-    if filename.startswith("package://"):
-        # package://<name>/<rest>: without a ROS workspace the package is the URDF's folder
-        rest = filename[len("package://"):].split("/", 1)
-        return urdf.parent / (rest[1] if len(rest) == 2 else rest[0])
+    """The path of a plain mesh filename (``file://`` or relative to the URDF's folder)."""
+    if filename.startswith("file://"):
+        return Path(filename[len("file://"):])
     return urdf.parent / filename
 
 
-def _geometry(urdf: Path, element: ET.Element, where: str, limits: ImportLimits, budget: FaceBudget):
+def _geometry(urdf: Path, element: ET.Element, where: str, limits: ImportLimits, budget: FaceBudget,
+              packages: PackageResolver):
     """Mesh of one <visual>/<collision>, in the frame of its link; meshes.UnusableMesh for a mesh
-    file that cannot be a piece."""
+    file that cannot be a piece. A ``package://`` file must stay in its package, a plain one in
+    the URDF's folder (unless ``limits`` allow outside)."""
     geometry = element.find("geometry")
     shape = None if geometry is None else next(iter(geometry), None)
     if shape is None:
@@ -125,7 +100,10 @@ def _geometry(urdf: Path, element: ET.Element, where: str, limits: ImportLimits,
         filename = shape.get("filename")
         if not filename:
             raise InputFileError(urdf, f"{where} <mesh>: no filename")
-        mesh_path = inside_folder(_mesh_path(urdf, filename), urdf.parent, urdf, f"{where} <mesh>", limits)
+        if filename.startswith(PACKAGE_PREFIX):
+            mesh_path = packages.resolve(filename, f"{where} <mesh>")
+        else:
+            mesh_path = inside_folder(_mesh_path(urdf, filename), urdf.parent, urdf, f"{where} <mesh>", limits)
         mesh = meshes.load_mesh_file(mesh_path, urdf, where, budget)
         factors = _numbers(urdf, f"{where} <mesh scale>", shape.get("scale"), 3, (1.0, 1.0, 1.0))
         mesh.apply_transform(scaling(factors))  # before the check: a zero scale factor flattens the mesh
@@ -239,6 +217,7 @@ def read_urdf(path: Path, progress: bool = False, limits: ImportLimits = ImportL
         for name, element in link_elements.items()
     }
     bar = tqdm(total=sum(map(len, shapes.values())), desc="meshes", unit="mesh", disable=not progress)
+    packages = PackageResolver(path)
     links: dict[str, Link] = {}
     for name, element in link_elements.items():
         pieces, shape_names, material_names, dropped = [], [], [], []
@@ -246,7 +225,7 @@ def read_urdf(path: Path, progress: bool = False, limits: ImportLimits = ImportL
             where = f"link {name!r} <{shape.tag}> #{index + 1}"
             bar.update()
             try:
-                local = _geometry(path, shape, where, limits, budget)
+                local = _geometry(path, shape, where, limits, budget, packages)
             except meshes.UnusableMesh as e:
                 warnings.append(f"{where}: {e}; that piece is dropped")
                 dropped.append(str(e))
