@@ -79,7 +79,11 @@ def scene_sources(m: int, seed: int) -> list[SourceSpec]:
 
 
 def import_sources(paths: list[Path]) -> list[SourceSpec]:
-    return [SourceSpec("import", Path(p).resolve().name, path=str(Path(p).resolve())) for p in paths]
+    """One spec per path; ids are unique in the import (see ``importers.object_ids``)."""
+    from data_pipeline.importers.object_ids import object_ids
+
+    ids = object_ids(paths)
+    return [SourceSpec("import", object_id, path=str(Path(p).resolve())) for p, object_id in zip(paths, ids)]
 
 
 def plan_shards(sources: list[SourceSpec], objects_per_shard: int, split: str = "hash") -> list[ShardTask]:

@@ -26,10 +26,13 @@ IMPORT_DESCRIPTION = """\
 Convert URDF / MJCF objects (e.g. PartNet-Mobility folders with mobility.urdf) and render them
 into ArrayRecord shards, like `jax3dc data build`.
 
-By default objects are split into train/val/test by a hash of their folder name, as in
-`jax3dc data build`; --split train|val|test puts every imported object in that one split (e.g. a
-held-out set of real objects for `jax3dc eval run`). The choice is part of the build's settings:
-resuming into the same --out with another --split is refused.
+Each object's id (in its record keys, <category>/<id>/<view>) is its folder or file name; sources
+that share a name are told apart by the folders above them (a/microwave.xml, b/microwave.xml ->
+a__microwave.xml, b__microwave.xml). By default objects are split into train/val/test by a hash
+of their id, as in `jax3dc data build`; --split train|val|test puts every imported object in that
+one split (e.g. a held-out set of real objects for `jax3dc eval run`). The sources and the split
+are part of the build's settings: resuming into the same --out with others is refused (a build is
+not appended to).
 
 An object that fails to load or render (a broken file, a mesh MuJoCo refuses) is skipped, not
 the build: a warning line names it and its path, manifest.json lists it under "skipped" with

@@ -7,8 +7,8 @@ the structure O (canonical), part meshes and boxes in the normalised frame, and 
 metres per nu, source, part names, warnings). ``output.write_imported`` writes it to a folder.
 
 Modules: ``frames`` (transforms), ``meshes`` (geometry loading),
-``urdf`` / ``mjcf`` (readers into a ``kinematic_tree.KinematicTree``; ``urdf.parse_xml`` parses
-untrusted XML through defusedxml), ``kinematic_tree``
+``urdf`` / ``mjcf`` (readers into a ``kinematic_tree.KinematicTree``; ``safe_xml.parse_xml`` parses
+untrusted XML through defusedxml; ``ros_package`` resolves ``package://`` mesh URIs), ``kinematic_tree``
 (which links are parts, which joint moves each), ``material_guess``, ``assemble``.
 This package imports nothing heavy on its own, so the CLI can register quickly.
 """

@@ -4,9 +4,9 @@ the object's folder.
 Imported files come from datasets and the web. Without caps, an OBJ of 5 million faces on 4
 vertices or an MJCF whose ``<replicate>`` nests to millions of bodies takes minutes and gigabytes
 before anything fails; each cap is refused in one line that names it and the flag that raises it.
-A mesh path may also point anywhere (``../``, an absolute path, ``package://x/../``, a symbolic
-link): reading it would copy a file from outside the object into the converted output, so it is
-refused unless the user allows it.
+A mesh path may also point anywhere (``../``, an absolute path, a symbolic link): reading it would
+copy a file from outside the object into the converted output, so it is refused unless the user
+allows it. (``package://`` URIs are kept inside their ROS package instead: see ``ros_package``.)
 """
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ from tqdm import tqdm
 from data_pipeline.importers import meshes
 from data_pipeline.importers.kinematic_tree import Edge, KinematicTree, Link, Motion
 from data_pipeline.importers.limits import FaceBudget, ImportLimits, inside_folder
-from data_pipeline.importers.urdf import parse_xml
+from data_pipeline.importers.safe_xml import parse_xml
 from jax3dc.errors import InputFileError, shorten
 
 HINGE_LIMIT = 2 * math.pi

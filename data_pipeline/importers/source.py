@@ -9,7 +9,7 @@ from data_pipeline.importers.assemble import ImportedObject, assemble
 from data_pipeline.importers.frames import FRONTS
 from data_pipeline.importers.limits import ImportLimits
 from data_pipeline.importers.mjcf import read_mjcf
-from data_pipeline.importers.urdf import parse_xml
+from data_pipeline.importers.safe_xml import parse_xml
 from data_pipeline.importers.urdf import read_urdf
 from jax3dc.errors import InputFileError
 
@@ -79,18 +79,20 @@ def default_front(source: Path) -> str:
 
 def import_object(
     path: Path, metres_per_unit: float | None = None, front: str | None = None, progress: bool = False,
-    limits: ImportLimits = ImportLimits(),
+    limits: ImportLimits = ImportLimits(), bounds_only: bool = False,
 ) -> ImportedObject:
     """Import one object.
 
     ``metres_per_unit`` overrides the unit of the source's lengths; ``front`` (one of
     ``FRONTS``) overrides the direction the source object faces (see :func:`default_front`);
     ``limits`` caps what the files may make us load and keeps mesh paths inside the object's folder.
+    ``bounds_only`` (URDF; an MJCF is always read in full) makes every mesh file its bounding box:
+    structure, joints and part boxes without the surfaces, for fast checks over a whole dataset.
     """
     source, fmt = find_source(Path(path))
     if front is not None and front not in FRONTS:
         raise InputFileError(source, f"front must be one of {FRONTS}, got {front!r}")
-    tree = read_urdf(source, progress, limits) if fmt == "urdf" else read_mjcf(source, progress, limits)
+    tree = read_urdf(source, progress, limits, bounds_only) if fmt == "urdf" else read_mjcf(source, progress, limits)
     note = URDF_SCALE_NOTE if fmt == "urdf" else MJCF_SCALE_NOTE
     if metres_per_unit is not None:
         if not metres_per_unit > 0:

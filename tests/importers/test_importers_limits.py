@@ -29,7 +29,7 @@ def layout(tmp_path: Path) -> Path:
     return tmp_path / "obj"
 
 
-@pytest.mark.parametrize("name", ["../outside.obj", "ABS", "package://x/../outside.obj", "m/link.obj"])
+@pytest.mark.parametrize("name", ["../outside.obj", "ABS", "m/link.obj"])  # package:// URIs: test_importers_ros_package
 def test_mesh_outside_the_folder_is_refused_unless_allowed(layout, name):
     os.symlink(layout.parent / "outside.obj", layout / "m" / "link.obj")
     name = str(layout.parent / "outside.obj") if name == "ABS" else name
