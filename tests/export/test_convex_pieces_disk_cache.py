@@ -201,3 +201,30 @@ def test_the_default_folder_is_beside_the_xla_cache(monkeypatch: pytest.MonkeyPa
     monkeypatch.delenv(disk.ENV)
     monkeypatch.setenv("HOME", "/home/someone")
     assert disk.cache_dir() == Path("/home/someone/.cache/jax3dc/pieces")
+
+
+def test_a_second_sweep_of_a_build_never_decomposes(counted: list[int], tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """`jax3dc physics sweep` run again on the same build: the part programs give the same meshes,
+    so every piece comes from the disk, and the verdicts are the first run's."""
+    from data_pipeline.factories import generate_object
+    from data_pipeline.record import Record
+    from data_pipeline.shards import write_dataset
+    from jax3dc.cli import main
+    from jax3dc.structure import to_json
+
+    obj = generate_object("cabinet", 0)  # a carcass of boards: a piece per board
+    meta = {"category": "cabinet", "object_id": obj.object_id, "view": 0, "scale_m_per_nu": obj.scale_m_per_nu}
+    records = [Record("cabinet/0", b"", b"", "", to_json(obj.structure), obj.program_text, meta)]
+    write_dataset(tmp_path / "build", records)
+    assert main(["physics", "sweep", str(tmp_path / "build"), "--out", str(tmp_path / "first")]) == 0
+    assert counted
+
+    def refuse(*_):
+        raise AssertionError("decomposed again")
+
+    monkeypatch.setattr(cp, "decompose", refuse)
+    cp.clear_cache()  # as a new process starts
+    assert main(["physics", "sweep", str(tmp_path / "build"), "--out", str(tmp_path / "again")]) == 0
+    verdicts = [(tmp_path / run / "verdicts.jsonl").read_text() for run in ("first", "again")]
+    assert verdicts[0] == verdicts[1] and '"skipped"' not in verdicts[0]
