@@ -4,7 +4,8 @@ decomposes again), in the same run, for a few factory objects.
 
 python3 -m bench.convex_cache [--categories cabinet bucket faucet oven] [--seed 0] [--repeats 2]
 
-Every run starts from an empty cache, as a new process does; the first object's commands run once
+Every run starts from an empty cache, as a new process does (the disk cache under it is off,
+``JAX3DC_PIECE_CACHE=''``: both columns are this process's own work); the first object's commands run once
 untimed first (imports and first calls). Per object and command it prints the
 best of ``--repeats`` seconds uncached and cached and their ratio (uncached / cached):
   export mjcf      ``jax3dc export --format mjcf`` (one decomposition either way)
@@ -27,6 +28,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ["JAX3DC_PIECE_CACHE"] = ""
 
 from PIL import Image  # noqa: E402
 

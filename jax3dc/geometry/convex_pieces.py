@@ -15,7 +15,11 @@ same object asks for it again (``predict`` writes three exports and runs the phy
 same parts), so ``convex_pieces`` keeps the pieces of the last ``CACHE_ENTRIES`` meshes in the
 process, keyed by a digest of the vertices, faces, arguments and decomposition constants: a hit
 returns the very arrays a fresh decomposition gave (read-only, since every caller shares them), so
-no export or verdict can differ from an uncached run. ``decompose`` is the uncached computation.
+no export or verdict can differ from an uncached run. Under it, ``piece_disk_cache`` keeps every
+mesh's pieces on disk (``~/.cache/jax3dc/pieces``, ``JAX3DC_PIECE_CACHE`` elsewhere or '' for off),
+keyed also by this file's source and the libraries' versions, so a repeated command on the same
+objects, or another worker of a sweep, never decomposes them again. ``decompose`` is the uncached
+computation.
 
 CoACD (``coacd`` 1.0.14 on PyPI, default threshold 0.05) was measured against this on the physics
 ground-truth bench (``bench/physics_ground_truth.py --seeds 1``: the 40 factory categories and the
@@ -50,6 +54,8 @@ from collections import OrderedDict
 import numpy as np
 import trimesh
 
+from jax3dc.geometry import piece_disk_cache
+
 HULL_MAX_VERTICES = 32  # vertex cap of each collision hull (MJX's convex collision is per vertex)
 CONCAVE_EXCESS_NU3 = 2e-4  # a closed piece whose hull exceeds its volume by this much is decomposed (a 0.06 nu pocket)
 DECOMPOSITION_DEPTH = 2  # voxel size of a concave component: its largest extent / (8 * 2**depth)
@@ -63,14 +69,19 @@ _cache_lock = threading.Lock()
 
 def convex_pieces(mesh: trimesh.Trimesh, min_size: float, scale: float = 1.0) -> list[np.ndarray]:
     """``decompose(mesh, min_size, scale)``, computed once per mesh and arguments in this process
-    (see the module docstring); the arrays are shared, hence read-only."""
+    and, with the disk cache on, once on this machine (see the module docstring); the arrays are
+    shared, hence read-only."""
     key = _cache_key(mesh, min_size, scale)
     with _cache_lock:
         hit = _cache.get(key)
         if hit is not None:
             _cache.move_to_end(key)
             return list(hit)
-    pieces = tuple(decompose(mesh, min_size, scale))
+    stored = piece_disk_cache.load(key)
+    if stored is None:
+        stored = decompose(mesh, min_size, scale)
+        piece_disk_cache.save(key, stored)
+    pieces = tuple(stored)
     for vertices in pieces:
         vertices.setflags(write=False)
     with _cache_lock:
@@ -81,7 +92,8 @@ def convex_pieces(mesh: trimesh.Trimesh, min_size: float, scale: float = 1.0) ->
 
 
 def clear_cache() -> None:
-    """Forget every cached decomposition (a benchmark times the uncached path this way)."""
+    """Forget the decompositions cached in this process, as a new process starts (the disk keeps
+    its entries: ``JAX3DC_PIECE_CACHE=''`` times the uncached path)."""
     with _cache_lock:
         _cache.clear()
 

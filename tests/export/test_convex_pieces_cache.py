@@ -17,7 +17,9 @@ from jax3dc.export.simulation import MIN_PIECE_M
 
 @pytest.fixture
 def counted(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """An empty cache, and the number of decompositions run since (one entry per call)."""
+    """An empty cache in memory and none on disk (this file is about the process's own), and the
+    number of decompositions run since (one entry per call)."""
+    monkeypatch.setenv("JAX3DC_PIECE_CACHE", "")
     cp.clear_cache()
     calls: list[int] = []
     fresh = cp.decompose
