@@ -220,15 +220,18 @@ class Generator:
         config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext,
                                   temperature=options.temperature if k > 1 else 0.0, top_p=options.top_p if k > 1 else 1.0)
         constraint = None
+        # Room per row: the decode's max_new_tokens, or less where the model's context ends first.
+        context = self.config.text.max_position_embeddings
+        room = [min(max_new_tokens, context - len(p.input_ids)) for p in rows for _ in range(k)]
         tasks = {p.task for p in rows}
         if options.constrained and len(tasks) > 1:
             raise ValueError(f"one batch mixes tasks {sorted(tasks)}: each task has its own grammar")
         if options.constrained and tasks == {"structure"}:
             texts = [p.record.prompt for p in rows for _ in range(k)]
             constraint = structure_constraint(self.tokenizer, self.config.text.vocab_size, texts,
-                                              [p.key for p in rows for _ in range(k)])
+                                              [p.key for p in rows for _ in range(k)], room)
         elif options.constrained and tasks == {"code"}:
-            constraint = program_constraint(self.tokenizer, self.config.text.vocab_size, len(rows) * k)
+            constraint = program_constraint(self.tokenizer, self.config.text.vocab_size, len(rows) * k, room)
         greedy = (np.arange(len(rows) * k) % k == 0) if k > 1 else None
         out = decode(self.model, prefilled, config, jax.random.key(options.seed), greedy, constraint)
         tokens, lengths, logprobs = np.asarray(out.tokens), np.asarray(out.lengths), np.asarray(out.logprobs)

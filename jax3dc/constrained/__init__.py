@@ -5,6 +5,10 @@ their part ids and joint counts set each row's registers; the tables are built o
 ``program_constraint`` gives the part-program grammar (SPEC §6) for a batch of stage-1 code
 prompts (the same for every row: a program depends on no prompt text).
 Pass either to ``jax3dc.generate.decode(..., constraint=...)``.
+
+The promise: for any model and any logits, a row given at least the shortest document's tokens
+stops on a document that parses and validates against its prompt (see ``structure`` and
+``program`` for how each grammar keeps it).
 """
 
 from __future__ import annotations
@@ -12,7 +16,9 @@ from __future__ import annotations
 import re
 from typing import Sequence
 
-from jax3dc.constrained.structure import ID_LIMIT, Rows, Tables, initial_rows, structure_tables
+import numpy as np
+
+from jax3dc.constrained.structure import ID_LIMIT, Rows, Tables, initial_rows, min_tokens, structure_tables
 from jax3dc.errors import StructureError
 
 _LEGEND_ID = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \|", re.MULTILINE)
@@ -30,9 +36,22 @@ def prompt_counts(prompt: str, where: str = "prompt") -> tuple[int, int]:
     return len(ids), (int(joints[1]) if joints else -1)
 
 
-def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], names: Sequence[str] | None = None):
+def _room(room: int | Sequence[int] | None, rows: int) -> list[int] | None:
+    if room is None:
+        return None
+    out = [int(room)] * rows if isinstance(room, (int, np.integer)) else [int(x) for x in room]
+    if len(out) != rows:
+        raise ValueError(f"room has {len(out)} entries for {rows} rows")
+    return out
+
+
+def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], names: Sequence[str] | None = None,
+                         room: int | Sequence[int] | None = None):
     """The structure grammar for these prompts (one row each), as a ``generate.Constraint``;
-    ``names`` (e.g. record keys) say which prompt an error is about."""
+    ``names`` (e.g. record keys) say which prompt an error is about. ``room`` (one for all rows, or
+    one per row): the most new tokens a row may write, stop token included (the smaller of
+    max_new_tokens and the model's context minus the prompt); a row whose room cannot hold the
+    shortest document for its prompt is an error naming it."""
     from jax3dc.generate import Constraint
 
     names = list(names) if names is not None else [f"prompt {i}" for i in range(len(prompts))]
@@ -41,15 +60,26 @@ def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], nam
         if n >= ID_LIMIT:
             raise StructureError("part_ids", name, f"{n} parts: the structure grammar takes at most {ID_LIMIT - 1} "
                                  "(decode this object with --unconstrained)")
-    return Constraint(structure_tables(tokenizer, vocab_size), initial_rows([n for n, _ in counts], [j for _, j in counts]))
+    room = _room(room, len(prompts))
+    tables = structure_tables(tokenizer, vocab_size)
+    rows = initial_rows([n for n, _ in counts], [j for _, j in counts], room)
+    if room is not None:
+        need = min_tokens(tables, rows)
+        for name, have, needed in zip(names, room, need):
+            if have < needed:
+                raise StructureError("max_new_tokens", name, f"room for {have} new tokens cannot hold the shortest "
+                                     f"structure for this prompt ({needed} tokens): raise --max-new-tokens, or use a "
+                                     "model with a longer context")
+    return Constraint(tables, rows)
 
 
-def program_constraint(tokenizer, vocab_size: int, rows: int):
-    """The part-program grammar for ``rows`` rows, as a ``generate.Constraint``."""
+def program_constraint(tokenizer, vocab_size: int, rows: int, room: int | Sequence[int] | None = None):
+    """The part-program grammar for ``rows`` rows, as a ``generate.Constraint``; ``room`` as for
+    ``structure_constraint``."""
     from jax3dc.constrained import program
     from jax3dc.generate import Constraint
 
-    return Constraint(program.program_tables(tokenizer, vocab_size), program.initial_rows(rows))
+    return Constraint(program.program_tables(tokenizer, vocab_size), program.initial_rows(rows, _room(room, rows)))
 
 
-__all__ = ["Rows", "Tables", "program_constraint", "prompt_counts", "structure_constraint"]
+__all__ = ["Rows", "Tables", "min_tokens", "program_constraint", "prompt_counts", "structure_constraint"]

@@ -181,14 +181,18 @@ class TokenTable:
     next_state: np.ndarray  # [P] int32
     events: np.ndarray  # [P, E] int32
     accept: np.ndarray  # [S] bool
+    passes: np.ndarray  # [P] bool: the token goes through one of ``lift``'s ``through`` states before its end
 
 
 def lift(auto: Automaton, tokens: Sequence[bytes | None], max_events: int, max_token_bytes: int = 24,
-         chunk: int = 16384) -> TokenTable:
+         chunk: int = 16384, through: Iterable[int] = ()) -> TokenTable:
     """Walk every token from every state (vectorised over both); a token passing more than
     ``max_events`` events, or longer than ``max_token_bytes``, is not allowed there (shorter tokens
-    always exist: every single byte is a token of a byte-level vocabulary)."""
+    always exist: every single byte is a token of a byte-level vocabulary). ``through``: states
+    whose crossing inside a token is recorded (``TokenTable.passes``)."""
     n_states = len(auto.edges)
+    marked = np.zeros(n_states + 1, bool)
+    marked[list(through)] = True
     # Byte transition tables, state n_states is the dead state.
     dead = n_states
     step = np.full((n_states + 1, 256), dead, np.int32)
@@ -206,7 +210,7 @@ def lift(auto: Automaton, tokens: Sequence[bytes | None], max_events: int, max_t
     for i, ev in enumerate(event_tuples):
         tuple_codes[i, :len(ev)] = ev
 
-    column_parts, pair_parts, next_parts, event_parts, count = [], [], [], [], 0
+    column_parts, pair_parts, next_parts, event_parts, pass_parts, count = [], [], [], [], [], 0
     sizes = np.asarray([len(t) if t is not None and 0 < len(t) <= max_token_bytes else 0 for t in tokens], np.int32)
     order = np.argsort(sizes, kind="stable")  # chunks of similar length walk few byte positions
     order = order[sizes[order] > 0]
@@ -220,11 +224,13 @@ def lift(auto: Automaton, tokens: Sequence[bytes | None], max_events: int, max_t
         cur = np.broadcast_to(np.arange(n_states, dtype=np.int32)[:, None], (n_states, len(ids))).copy()
         evs = np.zeros((n_states, len(ids), max_events + 1), np.int32)  # last column: overflow, dropped
         used = np.zeros((n_states, len(ids)), np.int32)
+        crossed = np.zeros((n_states, len(ids)), bool)
         for pos in range(width):
             active = pos < lengths  # [T]
             byte = data[:, pos]
             tup = np.where(active[None, :], step_events[cur, byte[None, :]], 0)
             cur = np.where(active[None, :], step[cur, byte[None, :]], cur)
+            crossed |= (pos < lengths - 1)[None, :] & marked[cur]
             for e in range(tuple_codes.shape[1]):
                 has = tuple_len[tup] > e
                 slot = np.where(has, np.minimum(used, max_events), max_events)
@@ -232,7 +238,7 @@ def lift(auto: Automaton, tokens: Sequence[bytes | None], max_events: int, max_t
                 used = used + has
         valid = (cur != dead) & (used <= max_events)
         keep = np.nonzero(valid.any(axis=0))[0]
-        valid, cur, evs = valid[:, keep], cur[:, keep], evs[:, keep]
+        valid, cur, evs, crossed = valid[:, keep], cur[:, keep], evs[:, keep], crossed[:, keep]
         s_idx, t_idx = np.nonzero(valid)
         pair = np.full(valid.shape, -1, np.int32)
         pair[s_idx, t_idx] = count + np.arange(len(s_idx), dtype=np.int32)
@@ -240,6 +246,7 @@ def lift(auto: Automaton, tokens: Sequence[bytes | None], max_events: int, max_t
         pair_parts.append(pair)
         next_parts.append(cur[s_idx, t_idx])
         event_parts.append(evs[s_idx, t_idx, :max_events])
+        pass_parts.append(crossed[s_idx, t_idx])
         count += len(s_idx)
     accept = np.zeros(n_states, bool)
     accept[list(auto.accept)] = True
@@ -247,4 +254,5 @@ def lift(auto: Automaton, tokens: Sequence[bytes | None], max_events: int, max_t
     by_id = np.argsort(columns)  # columns in token order (pair indices are unchanged)
     return TokenTable(columns[by_id], np.concatenate(pair_parts, axis=1)[:, by_id],
                       np.concatenate(next_parts).astype(np.int32),
-                      np.concatenate(event_parts).astype(np.int32).reshape(-1, max_events), accept)
+                      np.concatenate(event_parts).astype(np.int32).reshape(-1, max_events), accept,
+                      np.concatenate(pass_parts))

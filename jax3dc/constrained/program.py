@@ -20,7 +20,7 @@ still needs, fits the tokens left (every byte is a token, so a byte count bounds
 from __future__ import annotations
 
 import functools
-from typing import NamedTuple
+from typing import NamedTuple, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -34,6 +34,7 @@ MAX_TOKEN_BYTES = 24
 BOUND_MAX = 256  # names bound (rebinding counts again)
 PREFIX_MAX = 4096  # their prefixes
 SENTINEL = 0xFFFFFFFF
+UNLIMITED = 1 << 30  # a row given no room of its own
 DEF_START_BIT = 1 << 30
 KEY_MIX = 0x9E3779B1  # (function + 1) * KEY_MIX xor a prefix hash: one sorted table for all functions
 # Registers.
@@ -79,6 +80,7 @@ class Rows(NamedTuple):
     bound: jax.Array  # [B, BOUND_MAX] uint32, sorted, SENTINEL-padded
     prefixes: jax.Array  # [B, PREFIX_MAX] uint32, sorted, SENTINEL-padded
     pending: jax.Array  # [B, IDMAX] uint32: prefix hashes of the name being assigned
+    left: jax.Array  # [B] int32: tokens this row may still write (its room, counted down)
 
 
 def _hash_walk(auto: g.ProgramAutomaton, table: TokenTable, tokens: list[bytes | None]) -> dict[str, np.ndarray]:
@@ -211,13 +213,20 @@ def program_tables(tokenizer, vocab_size: int) -> Tables:
     return Tables(*(jnp.asarray(x) for x in host))
 
 
-def initial_rows(batch: int) -> Rows:
-    """Rows at the program's start (nothing bound, no part)."""
+def initial_rows(batch: int, room: Sequence[int] | None = None) -> Rows:
+    """Rows at the program's start (nothing bound, no part); ``room[i]``: the most tokens row i
+    may write, its stop token included (None: only the decode's own ``max_new_tokens``)."""
     regs = np.zeros((batch, N_REGS), np.int32)
     regs[:, FUNC] = -1
+    left = np.full(batch, UNLIMITED, np.int32) if room is None else np.asarray(room, np.int32)
     return Rows(jnp.zeros((batch,), jnp.int32), jnp.asarray(regs), jnp.zeros((batch,), jnp.uint32),
                 jnp.full((batch, BOUND_MAX), SENTINEL, jnp.uint32), jnp.full((batch, PREFIX_MAX), SENTINEL, jnp.uint32),
-                jnp.zeros((batch, g.IDMAX), jnp.uint32))
+                jnp.zeros((batch, g.IDMAX), jnp.uint32), jnp.asarray(left))
+
+
+def _left(rows: Rows, remaining: jax.Array) -> jax.Array:
+    """[B, 1]: tokens left, this one included: the decode's count capped by the row's room."""
+    return jnp.minimum(jnp.asarray(remaining, jnp.int32).reshape(-1), rows.left)[:, None]
 
 
 def _member(table: jax.Array, query: jax.Array) -> jax.Array:
@@ -323,8 +332,7 @@ def allowed(tables: Tables, rows: Rows, remaining: jax.Array) -> jax.Array:
     Stop tokens where the program is complete (a line ended, a part written), or as a last resort
     where nothing else is allowed."""
     pair = tables.pair[rows.state]
-    left = jnp.broadcast_to(jnp.asarray(remaining, jnp.int32).reshape(-1, 1), pair.shape[:1] + (1,))
-    mask, _ = _run(tables, rows, pair, left)
+    mask, _ = _run(tables, rows, pair, _left(rows, remaining))
     batch, vocab = mask.shape[0], tables.column_of.shape[0]
     stop = jnp.zeros((batch, vocab), bool).at[:, tables.stop_ids].set(True)
     may_stop = (tables.accept[rows.state] & (rows.regs[:, PARTS] > 0)) | ~jnp.any(mask, axis=1)
@@ -336,8 +344,7 @@ def advance(tables: Tables, rows: Rows, token: jax.Array, remaining: jax.Array) 
     """The rows after writing ``token`` [B] (a stop token leaves a row where it is)."""
     column = tables.column_of[token]
     pair = jnp.where(column >= 0, tables.pair[rows.state, jnp.maximum(column, 0)], -1)[:, None]
-    left = jnp.asarray(remaining, jnp.int32).reshape(-1, 1)
-    _, r = _run(tables, rows, pair, left)
+    _, r = _run(tables, rows, pair, _left(rows, remaining))
     written = pair[:, 0] >= 0
     p = jnp.maximum(pair[:, 0], 0)
     regs = jnp.where(written[:, None], jnp.stack([x[:, 0] for x in r], axis=-1), rows.regs)
@@ -377,4 +384,4 @@ def advance(tables: Tables, rows: Rows, token: jax.Array, remaining: jax.Array) 
         pending = pending.at[jnp.arange(pending.shape[0]), at].set(jnp.where(on, value, pending[jnp.arange(pending.shape[0]), at]))
         length = length + on
         first = first & ~on
-    return Rows(state, regs, name, bound, prefixes, pending)
+    return Rows(state, regs, name, bound, prefixes, pending, rows.left - 1)

@@ -9,7 +9,13 @@ is not spelled here but marked by events, checked on the device against register
   the registers decide which ids a slot takes (the next node id, a parent that closes no cycle,
   a defined material, a relation endpoint other than ``a``);
 * ``PARENT_NULL``, ``JOINT_OPEN``, ``NODE_CLOSE(path)``, ``NODES_MORE``/``NODES_END``,
-  ``MATERIAL_MORE``, ``RELATION_OPEN``: the joint count, the number of nodes, and the token budget.
+  ``MATERIAL_MORE``, ``RELATION_OPEN``, ``REL_TYPE(t)``: the joint count, the number of nodes, and
+  the lists' bounds (materials at most one more than parts, no relation twice). A list's "more" event rides
+  on the separator (``,``) itself, so a row never writes a comma it may not follow.
+
+Which states are slots' entries and digits, and where the pieces of a document (materials,
+nodes, relations) meet, is kept (``slots``, ``named``) for the tokens-to-finish tables
+(``jax3dc.constrained.structure_finish``).
 
 Regular rules are spelled out: a joint only below a parent; an axis that is not zero; a range
 [lo, hi] with lo <= 0 <= hi (the pose shown lies within its limits, so lo <= hi follows; 99.6 % of
@@ -21,16 +27,19 @@ what the factories and importers write, and few enough tokens of a large vocabul
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass, field
 
 from jax3dc.constrained.automaton import Automaton, embed
 from jax3dc.structure.schema import FAMILIES
 
 # Event codes: type << 8 | argument.
-DIGIT, SLOT_OPEN, SLOT_CLOSE, PARENT_NULL, JOINT_OPEN, NODE_CLOSE, NODES_MORE, NODES_END, MATERIAL_MORE, RELATION_OPEN = range(1, 11)
+(DIGIT, SLOT_OPEN, SLOT_CLOSE, PARENT_NULL, JOINT_OPEN, NODE_CLOSE, NODES_MORE, NODES_END, MATERIAL_MORE, RELATION_OPEN,
+ REL_TYPE) = range(1, 12)
 # Slot roles (SLOT_OPEN / SLOT_CLOSE argument).
 NODE_KEY, PARENT, MATERIAL_REF, MATERIAL_KEY, RELATION_A, RELATION_B = range(6)
 # NODE_CLOSE argument: which path closed the node.
 CLOSE_ROOT, CLOSE_RIGID, CLOSE_JOINT = range(3)
+RELATION_TYPES = ("symmetric", "instance", "support")  # REL_TYPE argument: the index
 
 DESC_MAX = 48  # characters of a material description (the training data's longest is 40)
 DESC_CHARS = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 -:,.'()/"
@@ -62,7 +71,15 @@ def _numbers(bound: int, sign: str) -> list[tuple[str, int]]:
     return out
 
 
-def _id_slot(a: Automaton, entry: int, role: int, exits: dict[int, tuple[int, tuple[int, ...]]]) -> None:
+@dataclass
+class StructureAutomaton(Automaton):
+    """The automaton plus where its id slots and pieces are."""
+
+    slots: list[tuple[int, tuple[int, int, int, int]]] = field(default_factory=list)  # entry, (zero, d1, d2, d3)
+    named: dict[str, int] = field(default_factory=dict)
+
+
+def _id_slot(a: StructureAutomaton, entry: int, role: int, exits: dict[int, tuple[int, tuple[int, ...]]]) -> None:
     """An id after ``entry``: '0' or [1-9] then up to 2 more digits, each digit a DIGIT event; any
     exit byte closes the slot (SLOT_CLOSE(role) before the exit's own events)."""
     closing = {b: (t, (ev(SLOT_CLOSE, role),) + e) for b, (t, e) in exits.items()}
@@ -76,6 +93,7 @@ def _id_slot(a: Automaton, entry: int, role: int, exits: dict[int, tuple[int, tu
     for state in (zero, d1, d2, d3):
         for b, (t, e) in closing.items():
             a.edge(state, b, t, e)
+    a.slots.append((entry, (zero, d1, d2, d3)))
 
 
 def _vector(a: Automaton, entry: int, end: int, nonzero: bool) -> None:
@@ -116,9 +134,9 @@ def _joint(a: Automaton, entry: int, node_done: int) -> None:
 
 
 @functools.cache
-def structure_automaton() -> Automaton:
+def structure_automaton() -> StructureAutomaton:
     """The automaton of every structure document (the same for every prompt; built once)."""
-    a = Automaton()
+    a = StructureAutomaton()
     # materials: {"0":{"family":"F","desc":"..."},"1":...}
     key = a.text(a.start, '{"materials":{"', events={14: (ev(SLOT_OPEN, MATERIAL_KEY),)})
     after_key = a.new()
@@ -158,6 +176,7 @@ def structure_automaton() -> Automaton:
                                                ord(","): (joint, (ev(JOINT_OPEN),))})
     _joint(a, joint, node_done)
     a.text(node_done, ',"', end=node_key, events={0: (ev(NODES_MORE),), 1: (ev(SLOT_OPEN, NODE_KEY),)})
+
     # relations: ,"relations":[{"type":"symmetric","a":A,"b":B,"plane":"xy"},{"type":"instance",...}]
     relations = a.text(node_done, '},"relations":[', events={0: (ev(NODES_END),)})
     end = a.new()
@@ -166,9 +185,10 @@ def structure_automaton() -> Automaton:
     a.text(relations, "]}", end=end)
     a.text(listed, "]}", end=end)
     rel_type = a.text(relations, '{"type":"', events={0: (ev(RELATION_OPEN),)})
-    a.text(listed, ',{"type":"', end=rel_type, events={1: (ev(RELATION_OPEN),)})
-    for kind in ("symmetric", "instance", "support"):
-        first = a.text(rel_type, f'{kind}","a":', events={len(kind) + 5: (ev(SLOT_OPEN, RELATION_A),)})
+    a.text(listed, ',{"type":"', end=rel_type, events={0: (ev(RELATION_OPEN),)})
+    for index, kind in enumerate(RELATION_TYPES):  # byte 1 tells the types apart ("symmetric", "support")
+        first = a.text(rel_type, f'{kind}","a":', events={1: (ev(REL_TYPE, index),),
+                                                          len(kind) + 5: (ev(SLOT_OPEN, RELATION_A),)})
         after_a = a.new()
         _id_slot(a, first, RELATION_A, {ord(","): (after_a, ())})
         second = a.text(after_a, '"b":', events={3: (ev(SLOT_OPEN, RELATION_B),)})
@@ -180,4 +200,5 @@ def structure_automaton() -> Automaton:
                 a.text(plane, f'{name}"}}', end=listed)
         else:
             _id_slot(a, second, RELATION_B, {ord("}"): (listed, ())})
+    a.named.update(node_key=node_key, node_done=node_done, parent=parent, end=end)
     return a
