@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+from bench.options import add_json_lines, add_preset, append_json_lines  # noqa: E402
 from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults  # noqa: E402
 
 apply_gpu_defaults(GENERATION_GPU_FLAGS)  # what `jax3dc predict` and `eval` decode with
@@ -143,14 +144,13 @@ def run_batch(model, preset: Preset, batch: int, generation: GenerationConfig, p
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description="Measure Qwen3-VL generation speed (tokens/s) and peak device memory with random weights.")
-    parser.add_argument("--preset", choices=sorted(PRESETS), default="qwen3_vl_4b",
-                        help="model size and workload: qwen3_vl_4b (GPU) or tiny (CPU smoke test)")
+    add_preset(parser, choices=sorted(PRESETS), help="model size and workload: qwen3_vl_4b (GPU) or tiny (CPU smoke test)")
     parser.add_argument("--batch", type=int, nargs="+", help="batch sizes (default: the preset's, e.g. 1 32)")
     parser.add_argument("--new-tokens", type=int, help="tokens generated per row (default: 512 for 4B)")
     parser.add_argument("--prefill-rows", type=int, help="rows per prefill chunk (bounds prompt-pass memory)")
     parser.add_argument("--dtype", choices=("bfloat16", "float32"), default="bfloat16",
                         help="parameter and compute dtype")
-    parser.add_argument("--json-out", help="also append the JSON lines to this file")
+    add_json_lines(parser, "--json-out")
     parser.add_argument("--profile", help="trace one more run of the first batch size into this folder and summarise it")
     parser.add_argument("--compile-cache", help="persistent XLA compilation cache folder (faster reruns)")
     args = parser.parse_args(argv)
@@ -186,10 +186,7 @@ def main(argv: list[str] | None = None) -> int:
               f"peak {result['peak_memory_gb']} GB", flush=True)
         print(json.dumps(result), flush=True)
         lines.append(result)
-    if args.json_out:
-        with open(args.json_out, "a", encoding="utf-8") as f:
-            for line in lines:
-                f.write(json.dumps(line) + "\n")
+    append_json_lines(args.json_out, lines)
     return 0
 
 

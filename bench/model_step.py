@@ -9,18 +9,21 @@ kernel and remat. (Decoding is measured by bench/decode.py.)
 
 from __future__ import annotations
 
-import argparse
 import json
+import sys
 import time
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.qwen3_vl import Qwen3VL
-from jax3dc.model.random_weights import build_random
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
+from bench.options import add_attention_impl, add_batch, add_image, add_preset, add_seq, bench_parser  # noqa: E402
+from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
+from jax3dc.model.qwen3_vl import Qwen3VL  # noqa: E402
+from jax3dc.model.random_weights import build_random  # noqa: E402
 
 
 def image_batch(cfg: Qwen3VLConfig, rows: int, length: int, image: int, seed: int = 0):
@@ -79,12 +82,12 @@ def bench_train(model: Qwen3VL, cfg: Qwen3VLConfig, rows: int, length: int, imag
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--preset", default="qwen3_vl_4b", help="Qwen3VLConfig preset name")
-    ap.add_argument("--batch", type=int, default=4, help="rows of the training step")
-    ap.add_argument("--length", type=int, default=2048, help="tokens per training row")
-    ap.add_argument("--image", type=int, default=448, help="image side in pixels (one image per row)")
-    ap.add_argument("--impl", default="xla", choices=["xla", "cudnn"], help="attention implementation")
+    ap = bench_parser(__doc__)
+    add_preset(ap)
+    add_batch(ap, 4)
+    add_seq(ap, 2048, flag="--length")
+    add_image(ap)
+    add_attention_impl(ap, "xla")
     ap.add_argument("--remat", action="store_true", help="recompute each decoder layer in the backward pass")
     ap.add_argument("--repeat", type=int, default=5, help="timed training steps")
     ap.add_argument("--out", help="write the figures as JSON here too")

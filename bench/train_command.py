@@ -15,7 +15,6 @@ sheet's 989.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import subprocess
@@ -23,6 +22,9 @@ import sys
 import time
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from bench.options import add_batch, add_json_lines, add_preset, add_seq, append_json_lines, bench_parser  # noqa: E402
 
 PEAK_MEASURED_BF16 = 790e12
 PEAK_DATASHEET = 989e12
@@ -69,11 +71,11 @@ def run_peer(peer: str, seq: int, out_dir: str) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = bench_parser(__doc__)
     ap.add_argument("--data", required=True, help="shards from `jax3dc data build/import`")
-    ap.add_argument("--preset", default="qwen3_vl_4b")
-    ap.add_argument("--seq", type=int, default=4096)
-    ap.add_argument("--batch", type=int, default=4, help="rows per optimiser step")
+    add_preset(ap)
+    add_seq(ap, 4096)
+    add_batch(ap, 4)
     ap.add_argument("--accum", type=int, default=4, help="micro-batches per step")
     ap.add_argument("--steps", type=int, default=40)
     ap.add_argument("--log-every", type=int, default=10)
@@ -82,7 +84,7 @@ def main() -> None:
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="more train settings")
     ap.add_argument("--peer", help="hf_peer.py: run it after, in the same call")
     ap.add_argument("--out", required=True, help="folder for the run and the figures")
-    ap.add_argument("--json", help="append the figures as one JSON line here")
+    add_json_lines(ap)
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     ours, wall = run_train(a, os.path.join(a.out, "run"))
@@ -97,9 +99,7 @@ def main() -> None:
         if peer.get("train_tokens_per_s"):
             row["ratio"] = ours["tokens_per_s"] / peer["train_tokens_per_s"]
             print(f"HF peer: {peer['train_tokens_per_s']} tokens/s -> ratio {row['ratio']:.2f}", flush=True)
-    if a.json:
-        with open(a.json, "a") as f:
-            f.write(json.dumps(row) + "\n")
+    append_json_lines(a.json, [row])
 
 
 if __name__ == "__main__":

@@ -15,10 +15,11 @@ compile time, and the scaling efficiency of tokens/s per device against the 1-de
 
 from __future__ import annotations
 
-import argparse
 import json
+import sys
 import time
 from functools import partial
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -27,12 +28,15 @@ import optax
 from flax import nnx
 from jax.sharding import NamedSharding, PartitionSpec as P
 
-from bench.model_step import image_batch
-from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.model.qwen3_vl import Qwen3VL
-from jax3dc.model.random_weights import build_random
-from jax3dc.sharding import make_mesh, model_shardings
-from train.metrics_log import PEAK_FLOPS, FlopsModel
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
+from bench.model_step import image_batch  # noqa: E402
+from bench.options import (add_attention_impl, add_image, add_json_lines, add_preset, add_seq,  # noqa: E402
+                           append_json_lines, bench_parser)
+from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
+from jax3dc.model.qwen3_vl import Qwen3VL  # noqa: E402
+from jax3dc.model.random_weights import build_random  # noqa: E402
+from jax3dc.sharding import make_mesh, model_shardings  # noqa: E402
+from train.metrics_log import PEAK_FLOPS, FlopsModel  # noqa: E402
 
 PEAK_MEASURED_BF16 = 790e12  # the bf16 matmul rate measured on these GPUs (hf_peer.py's denominator)
 
@@ -90,17 +94,17 @@ def run_layout(cfg: Qwen3VLConfig, layout: tuple[int, int, int], args) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--preset", default="qwen3_vl_4b", help="Qwen3VLConfig preset name")
-    ap.add_argument("--seq", type=int, default=8192, help="tokens per row")
+    ap = bench_parser(__doc__)
+    add_preset(ap)
+    add_seq(ap, 8192)
     ap.add_argument("--per-device-batch", type=int, default=2, help="rows per data/fsdp device")
-    ap.add_argument("--image", type=int, default=448, help="image side in pixels (one image per row)")
+    add_image(ap)
     ap.add_argument("--layouts", nargs="+", default=["1x1x1", "1x8x1", "1x4x2"],
                     help="meshes as DATAxFSDPxTENSOR")
-    ap.add_argument("--impl", default="cudnn", choices=["xla", "cudnn"], help="attention kernel")
+    add_attention_impl(ap, "cudnn")
     ap.add_argument("--no-remat", dest="remat", action="store_false", help="keep activations")
     ap.add_argument("--steps", type=int, default=3, help="timed steps per layout")
-    ap.add_argument("--out", help="append JSON lines here too")
+    add_json_lines(ap, "--out")
     args = ap.parse_args(argv)
     cfg = getattr(Qwen3VLConfig, args.preset)()
     results = []
@@ -115,9 +119,7 @@ def main(argv: list[str] | None = None) -> int:
                                               / results[0]["tokens_per_s_per_device"], 3)
         results.append(res)
         print(json.dumps(res), flush=True)
-        if args.out:
-            with open(args.out, "a") as f:
-                f.write(json.dumps(res) + "\n")
+        append_json_lines(args.out, [res])
     return 0
 
 

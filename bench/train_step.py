@@ -18,25 +18,27 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from bench.options import add_batch, add_image, add_json_lines, add_preset, add_seq, append_json_lines, bench_parser  # noqa: E402
+
 os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
 REMAT_NAMES = ("none", "full", "minimal", "qkv")  # jax3dc/model/layer_stack.py (not imported: jax loads after the flags)
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--preset", default="qwen3_vl_4b")
-    ap.add_argument("--seq", type=int, default=4096)
-    ap.add_argument("--batch", type=int, default=1)
+    ap = bench_parser(__doc__)
+    add_preset(ap)
+    add_seq(ap, 4096)
+    add_batch(ap, 1)
     ap.add_argument("--remat", default="none", choices=REMAT_NAMES)
     ap.add_argument("--scan", action=argparse.BooleanOptionalAction, default=False,
                     help="decoder layers as one lax.scan, or unrolled (the trainer's default)")
-    ap.add_argument("--image", type=int, default=448)
+    add_image(ap)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--master-fp32", action="store_true", help="fp32 master weights (more memory)")
     ap.add_argument("--lora-rank", type=int, default=0, help="> 0: train LoRA adapters of this rank only")
     ap.add_argument("--attention", default=None, help="jax.nn.dot_product_attention implementation, e.g. cudnn")
     ap.add_argument("--mesh", default="1,-1,1", help="data,fsdp,tensor over all visible devices (-1: the rest)")
-    ap.add_argument("--json", help="append the figures as one JSON line to this file")
+    add_json_lines(ap)
     ap.add_argument("--profile", help="after timing, trace 2 steps into this directory and summarise it")
     a = ap.parse_args()
     started = time.perf_counter()
@@ -89,16 +91,13 @@ def main() -> None:
             to_host(m["loss"])
         summarise(a.profile, top=20)
     if a.json:
-        import json
-
         row = {"device": dev.device_kind, "devices": jax.device_count(), "mesh": dict(trainer.mesh.shape),
                "preset": a.preset, "batch": a.batch, "seq": a.seq, "remat": a.remat, "scan": a.scan, "lora_rank": a.lora_rank, "step_s": dt,
                "tokens_per_s": a.batch * a.seq / dt, "tokens_per_s_per_device": a.batch * a.seq / dt / jax.device_count(),
                "mfu_vs_989": flops / 989e12 / jax.device_count(), "peak_mem_gib": max(peaks),
                "setup_and_compile_s": compiled - started, "compile": compile_cost,
                "xla_flags": os.environ.get("XLA_FLAGS", "")}
-        with open(a.json, "a") as f:
-            f.write(json.dumps(row) + "\n")
+        append_json_lines(a.json, [row])
 
 
 if __name__ == "__main__":

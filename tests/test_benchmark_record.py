@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -76,3 +77,45 @@ def test_plot_writes_a_png_and_refuses_an_unknown_name(tmp_path):
     assert record.main(["--record", str(path), "--plot", GOOD["name"], str(out)]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert record.main(["--record", str(path), "--plot", "no.such.figure", str(tmp_path / "x.png")]) == 1
+
+
+
+def _cited_figures(text: str) -> list[tuple[str, str, str, str | None]]:
+    """(name, date, commit, value cell) of every table row of docs/BENCHMARKS.md that names figures.
+
+    A cell may name several figures of one family ("`release.fixtures_parent`, `_edge_f1`"); their
+    values stand in a table of their own, so the value cell is given only for a single name."""
+    cited = []
+    for line in text.splitlines():
+        if not line.startswith("| `"):
+            continue
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        names = re.findall(r"`([^`]+)`", cells[0])
+        base = names[0].rsplit("_", 1)[0]
+        for name in names:
+            cited.append((base + name if name.startswith("_") else name, cells[5], cells[7],
+                          cells[1] if len(names) == 1 else None))
+    return cited
+
+
+def _numbers(cell: str) -> list[float]:
+    """The numbers a cell shows; "a/b" also counts as the percentage 100 a / b."""
+    numbers = [float(x.replace(",", "")) for x in re.findall(r"\d[\d,]*(?:\.\d+)?(?:e-?\d+)?", cell)]
+    numbers += [100 * int(a) / int(b) for a, b in re.findall(r"(\d+) ?/ ?(\d+)", cell) if int(b)]
+    return numbers
+
+
+def test_every_figure_in_benchmarks_md_is_the_current_line_of_the_record():
+    """The page shows current figures only: value, date and commit of the name's latest line."""
+    current = record.latest(record.load())
+    cited = _cited_figures((ROOT / "docs" / "BENCHMARKS.md").read_text())
+    assert len(cited) >= 100
+    for name, date, commit, shown in cited:
+        assert name in current, f"BENCHMARKS.md cites {name}, which docs/benchmarks.jsonl lacks"
+        line = current[name]
+        assert date == line["date"], f"{name}: BENCHMARKS.md says {date}, the record {line['date']}"
+        assert commit == (line["commit"] or "—"), f"{name}: BENCHMARKS.md says {commit}, the record {line['commit']}"
+        if shown is not None:
+            value = line["value"]
+            assert any(abs(n - value) <= max(0.051, abs(value) * 1e-3) for n in _numbers(shown)), (
+                f"{name}: BENCHMARKS.md shows {shown!r}, the record's value is {value}")
