@@ -9,7 +9,6 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 import numpy as np
-import pytest
 from flax import nnx
 
 from data_pipeline.factories.registry import SCHEMAS, run_parameters, sample_parameters
