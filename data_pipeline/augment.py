@@ -66,7 +66,7 @@ def split_part(obj: SourceObject, rng: np.random.Generator) -> SourceObject | No
     parts = dict(obj.parts)
     parts[pid], parts[new_id] = halves
     return replace(obj, structure=replace(s, nodes=nodes), parts=parts, program=None,
-                   augmentation=f"split-{pid}")
+                   parameters=None, augmentation=f"split-{pid}")
 
 
 def merge_parts(obj: SourceObject, rng: np.random.Generator) -> SourceObject | None:
@@ -86,4 +86,4 @@ def merge_parts(obj: SourceObject, rng: np.random.Generator) -> SourceObject | N
     parts = {renumber[p]: m for p, m in obj.parts.items() if p != gone}
     parts[renumber[keep]] = trimesh.util.concatenate([obj.parts[keep], obj.parts[gone]])
     return replace(obj, structure=replace(s, nodes=nodes, relations=relations), parts=parts, program=None,
-                   augmentation=f"merge-{keep}-{gone}")
+                   parameters=None, augmentation=f"merge-{keep}-{gone}")

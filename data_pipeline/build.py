@@ -107,9 +107,12 @@ def plan_shards(sources: list[SourceSpec], objects_per_shard: int, split: str = 
 def load_source(spec: SourceSpec) -> SourceObject:
     if spec.kind == "factory":
         from data_pipeline.factories import generate_object
+        from data_pipeline.factories.registry import SCHEMAS
+        from jax3dc.parameters import format_parameters
 
         g = generate_object(spec.category, spec.seed)
-        return SourceObject(g.category, g.object_id, g.structure, g.parts, g.scale_m_per_nu, g.program_text)
+        return SourceObject(g.category, g.object_id, g.structure, g.parts, g.scale_m_per_nu, g.program_text,
+                            parameters=format_parameters(g.parameters, SCHEMAS[g.category]))
     from data_pipeline.importers.source import import_object
 
     obj = import_object(Path(spec.path))

@@ -3,7 +3,9 @@
 Two tasks read the same records (SPEC §4, §6):
 
 * ``structure`` (stage 2): images I and S, the record's prompt -> the target JSON;
-* ``code`` (stage-1 code backend): image I and CODE_PROMPT -> the record's part program.
+* ``code`` (stage-1 code backend): image I and CODE_PROMPT -> the record's part program;
+* ``parameters`` (stage-1 parameter backend): image I and PARAMETERS_PROMPT -> the record's
+  factory parameters (jax3dc.parameters), which the factory runs into the same parts.
 
 The chat is built exactly as generation builds it (jax3dc.prompt + jax3dc.processing.chat), so a
 model sees at inference the very tokens it was trained on, up to the assistant answer.
@@ -24,11 +26,11 @@ from jax3dc.processing.chat import encode_chat
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images
 from jax3dc.processing.tokenizer import Tokenizer
 from jax3dc.errors import StructureError
-from jax3dc.prompt import chat_messages, code_messages, legend_boxes
+from jax3dc.prompt import chat_messages, code_messages, legend_boxes, parameters_messages
 from jax3dc.structure.box_frame import PivotFrame, target_in_frame
 
-TASKS = ("structure", "code")
-IMAGES_PER_TASK = {"structure": 2, "code": 1}  # I and S; I alone
+TASKS = ("structure", "code", "parameters")
+IMAGES_PER_TASK = {"structure": 2, "code": 1, "parameters": 1}  # I and S; I alone; I alone
 
 
 class UnusableRecord(Jax3dcError):
@@ -41,6 +43,13 @@ class MissingProgram(UnusableRecord):
     """A record without a part program, asked for by the code task."""
 
     reason = "no_program"
+
+
+class MissingParameters(UnusableRecord):
+    """A record without factory parameters (an imported, augmented or scene record), asked for by
+    the parameters task."""
+
+    reason = "no_parameters"
 
 
 @dataclass(frozen=True)
@@ -80,6 +89,10 @@ class ExampleEncoder:
             except StructureError as e:
                 raise UnusableRecord(f"record {record.key!r}: target is not a valid structure: {e}") from None
             return chat_messages(record.prompt, target)
+        if self.task == "parameters":
+            if not record.parameters:
+                raise MissingParameters(f"record {record.key!r} has no factory parameters (parameters task)")
+            return parameters_messages(record.parameters)
         if not record.program:
             raise MissingProgram(f"record {record.key!r} has no part program (code task)")
         return code_messages(record.program)

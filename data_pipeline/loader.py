@@ -10,8 +10,9 @@ iterator state (grain's state plus the skip counters) is JSON, saved with the tr
 checkpoint, so a resumed run sees exactly the batches it would have seen.
 
 Nothing is cut: an example longer than a row is skipped and counted (``too_long``), as is a
-record that cannot be decoded (``corrupt``) or has no part program for the code task
-(``no_program``); the first of each kind is logged with its key.
+record that cannot be decoded (``corrupt``), has no part program for the code task
+(``no_program``) or no factory parameters for the parameters task (``no_parameters``); the first
+of each kind is logged with its key.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from jax3dc.structure.box_frame import PivotFrame
 
 log = logging.getLogger(__name__)
 
-SKIP_REASONS = ("corrupt", "too_long", "no_program", "other_split")
+SKIP_REASONS = ("corrupt", "too_long", "no_program", "no_parameters", "other_split")
 
 
 class LoaderError(Jax3dcError):

@@ -25,11 +25,12 @@ class CorruptRecordError(Jax3dcError):
 
 @dataclass(frozen=True)
 class Record:
-    """Everything one sample needs: I and S as PNG bytes, prompt, target O, program, meta.
+    """Everything one sample needs: I and S as PNG bytes, prompt, target O, program, parameters, meta.
 
     ``key`` is unique in a dataset: ``<category>/<object_id>/<view>[/<augmentation>]``.
     ``meta`` holds category, object_id, seed, view, split, granularity, scale, camera,
-    per-part boxes and the augmentation applied (SPEC §4).
+    per-part boxes and the augmentation applied (SPEC §4). ``parameters`` is the factory's
+    parameter text (jax3dc.parameters), the stage-1 target, when the parts are the factory's own.
     """
 
     key: str
@@ -38,6 +39,7 @@ class Record:
     prompt: str
     target: str
     program: str | None = None
+    parameters: str | None = None
     meta: dict[str, Any] = field(default_factory=dict)
 
 
@@ -51,6 +53,8 @@ def encode_record(record: Record) -> bytes:
         "image_png_bytes": len(record.image_png),
         "seg_png_bytes": len(record.seg_png),
     }
+    if record.parameters is not None:  # absent otherwise: records without it keep their bytes
+        header["parameters"] = record.parameters
     head = json.dumps(header, sort_keys=True, separators=(",", ":"), allow_nan=False).encode()
     return MAGIC + _LEN.pack(len(head)) + head + record.image_png + record.seg_png
 
@@ -75,4 +79,5 @@ def decode_record(blob: bytes) -> Record:
         raise CorruptRecordError(
             f"record {key!r}: image blobs hold {len(body)} bytes, header says {n_img + n_seg}")
     return Record(key=key, image_png=body[:n_img], seg_png=body[n_img:], prompt=prompt,
-                  target=target, program=header.get("program"), meta=header.get("meta") or {})
+                  target=target, program=header.get("program"),
+                  parameters=header.get("parameters"), meta=header.get("meta") or {})

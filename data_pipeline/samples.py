@@ -37,6 +37,7 @@ class SourceObject:
     parts: dict[int, trimesh.Trimesh]
     scale_m_per_nu: float
     program: str | None = None
+    parameters: str | None = None  # the factory's parameter text, when the parts are its own
     granularity: str = "part"
     augmentation: str | None = None
     warnings: tuple[str, ...] = ()  # what an importer dropped or guessed; `data import` prints them once
@@ -103,7 +104,8 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
             records.append(Record(
                 key=key, image_png=png_bytes(rgb), seg_png=png_bytes(paint_segmentation(ids, palette)),
                 prompt=build_prompt(boxes, palette, len(structure.joints()) or None),
-                target=to_json(structure), program=obj.program, meta=meta))
+                target=to_json(structure), program=obj.program,
+                parameters=obj.parameters, meta=meta))
         return records
     finally:
         renderer.close()

@@ -15,7 +15,8 @@ jax3dc and by transformers' AutoTokenizer). Train a model with it:
 `jax3dc train --set tokenizer=DIR ...`.
 
 Texts are taken as the model sees them: the structure conversation (prompt, target) and, for
-records with a program, the code conversation (CODE_PROMPT, program). Only the train split is
+records with a program, the code conversation (CODE_PROMPT, program), and for records with factory
+parameters, the parameters conversation (PARAMETERS_PROMPT, parameters). Only the train split is
 used unless --split says otherwise; bench/tokenizer.py compares vocabulary sizes with Qwen3's.
 
 example:  jax3dc data tokenizer --data data/train --vocab-size 4096 --out tokenizers/bpe4k
@@ -25,7 +26,7 @@ example:  jax3dc data tokenizer --data data/train --vocab-size 4096 --out tokeni
 def record_texts(records: Iterable, split: str) -> Iterator[str]:
     """Chat segments of every record in ``split`` ("all": every record)."""
     from jax3dc.processing.bpe import chat_segments
-    from jax3dc.prompt import chat_messages, code_messages
+    from jax3dc.prompt import chat_messages, code_messages, parameters_messages
 
     for record in records:
         if split != "all" and record.meta.get("split") != split:
@@ -33,6 +34,8 @@ def record_texts(records: Iterable, split: str) -> Iterator[str]:
         yield from chat_segments(chat_messages(record.prompt, record.target))
         if record.program:
             yield from chat_segments(code_messages(record.program))
+        if record.parameters:
+            yield from chat_segments(parameters_messages(record.parameters))
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

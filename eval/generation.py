@@ -40,12 +40,12 @@ from data_pipeline.shards import read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.processing.chat import encode_chat
-from jax3dc.constrained import program_constraint, structure_constraint
+from jax3dc.constrained import parameters_constraint, program_constraint, structure_constraint
 from jax3dc.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
 from jax3dc.model.params import load_pretrained
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images, smart_resize
 from jax3dc.processing.tokenizer import load_tokenizer
-from jax3dc.prompt import chat_messages, code_messages, legend_boxes
+from jax3dc.prompt import chat_messages, code_messages, legend_boxes, parameters_messages
 from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
 from jax3dc.structure.box_frame import PivotFrame, text_to_absolute
 
@@ -146,7 +146,7 @@ class Prompt:
     key: str
     input_ids: np.ndarray
     record: Record
-    task: str = "structure"  # or "code": image I alone -> part program
+    task: str = "structure"  # or "code": image I alone -> part program; "parameters": I alone -> factory parameters
 
 
 @dataclass(frozen=True)
@@ -197,7 +197,8 @@ class Generator:
         return np.asarray(rows, dtype=np.int64)
 
     def prompt(self, record: Record, task: str = "structure") -> Prompt:
-        messages = chat_messages(record.prompt) if task == "structure" else code_messages()
+        messages = (chat_messages(record.prompt) if task == "structure" else
+                    parameters_messages() if task == "parameters" else code_messages())
         chat = encode_chat(self.tokenizer, messages, self.grids(record, task),
                            self.config.vision.spatial_merge_size, add_generation_prompt=True)
         return Prompt(record.key, chat.input_ids, record, task)
@@ -232,6 +233,10 @@ class Generator:
                                               [p.key for p in rows for _ in range(k)], room)
         elif options.constrained and tasks == {"code"}:
             constraint = program_constraint(self.tokenizer, self.config.text.vocab_size, len(rows) * k, room)
+        elif options.constrained and tasks == {"parameters"}:
+            from data_pipeline.factories.registry import SCHEMAS
+
+            constraint = parameters_constraint(SCHEMAS, self.tokenizer, self.config.text.vocab_size, len(rows) * k)
         greedy = (np.arange(len(rows) * k) % k == 0) if k > 1 else None
         out = decode(self.model, prefilled, config, jax.random.key(options.seed), greedy, constraint)
         tokens, lengths, logprobs = np.asarray(out.tokens), np.asarray(out.lengths), np.asarray(out.logprobs)

@@ -8,6 +8,7 @@ predictions.jsonl), ``--predictions FILE`` (score lines made elsewhere), or
 ``--task code`` scores the stage-1 code backend instead: the model writes a part program from
 image I alone, the interpreter runs it, and eval.metrics.programs compares its parts with those
 of the record's own program (programs.jsonl per object, metrics.json, tables.md).
+``--task parameters`` scores the stage-1 parameter backend (eval.parameters_run).
 
 Generation is grammar-constrained unless ``--unconstrained``. With ``--candidates K`` > 1 or
 ``--repair``, a verification stage follows (``eval.verified.stage``): the physics verdict picks
@@ -84,6 +85,10 @@ def run_eval(args: argparse.Namespace) -> int:
 
     if args.task == "code":
         return _run_code(args, records, out)
+    if args.task == "parameters":
+        from eval.parameters_run import run_parameters_task
+
+        return run_parameters_task(args, records, out)
     notes = []
     if args.predictions is not None:
         preds, name = load_predictions(args.predictions), Path(args.predictions).stem
@@ -188,9 +193,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      '({"key", "text"} or {"key", "structure"} lines)')
     run.add_argument("--reference-as-prediction", action="store_true",
                      help="score each record's own target (sanity check: everything must be 100)")
-    run.add_argument("--task", default="structure", choices=("structure", "code"),
+    run.add_argument("--task", default="structure", choices=("structure", "code", "parameters"),
                      help="structure (stage 2: I + S + prompt -> structure, the default) or code (stage 1: I -> part "
-                     "program, scored by running it against the record's own program)")
+                     "program, scored by running it against the record's own program) or parameters (stage 1: I -> a factory's "
+                     "category and parameters, run by the factory and scored against the record's own parts, matched "
+                     "one-to-one by box overlap)")
     run.add_argument("--split", default="test",
                      help="split to evaluate: shard-name prefix and meta.split (default test); "
                      f"'{ALL_SPLITS}' scores every record of every shard")

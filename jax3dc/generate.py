@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from jax3dc.constrained import program, structure
+from jax3dc.constrained import parameters, program, structure
 from jax3dc.model.qwen3_vl import KVCache
 from jax3dc.processing.tokenizer import QWEN_VL_SPECIAL_IDS
 
@@ -69,8 +69,8 @@ class Generated(NamedTuple):
 class Constraint(NamedTuple):
     """A grammar on the device: its lifted tables and each row's state (``jax3dc.constrained``)."""
 
-    tables: structure.Tables | program.Tables
-    rows: structure.Rows | program.Rows
+    tables: structure.Tables | program.Tables | parameters.Tables
+    rows: structure.Rows | program.Rows | parameters.Rows
 
 
 class Prefilled(NamedTuple):
@@ -148,7 +148,7 @@ def _decode(graphdef, state, logits: jax.Array, cache, rope_deltas: jax.Array, k
     batch = logits.shape[0]
     stop_ids = jnp.asarray(config.stop_ids, jnp.int32)
 
-    grammar = program if isinstance(constraint and constraint.tables, program.Tables) else structure
+    grammar = {program.Tables: program, parameters.Tables: parameters}.get(type(constraint and constraint.tables), structure)
 
     def emit(step, logits, out: _Out, rows):
         logits = logits.astype(jnp.float32)

@@ -102,6 +102,23 @@ CODE_PROMPT = (
 )
 
 
+#: The stage-1 parameter backend's user text (jax3dc.parameters): the model sees only the RGB
+#: image and writes the category and parameters of the factory that rebuilds the object.
+PARAMETERS_PROMPT = (
+    "The image shows an object. Write its category and parameters, one line: "
+    "category(name=value, ...) with every parameter of that category in order. "
+    "Lengths in metres, angles in degrees, counts and option indices as integers, 0/1 for yes/no."
+)
+
+
+def parameters_messages(text: str | None = None) -> list[dict]:
+    """User turn (image I, PARAMETERS_PROMPT) and, for training, the assistant turn (the record's text)."""
+    messages: list[dict] = [{"role": "user", "content": [{"type": "image"}, {"type": "text", "text": PARAMETERS_PROMPT}]}]
+    if text is not None:
+        messages.append({"role": "assistant", "content": [{"type": "text", "text": text}]})
+    return messages
+
+
 def code_messages(program: str | None = None) -> list[dict]:
     """User turn (image I, CODE_PROMPT) and, for training, the assistant turn (the program)."""
     messages: list[dict] = [{"role": "user", "content": [{"type": "image"}, {"type": "text", "text": CODE_PROMPT}]}]

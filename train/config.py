@@ -53,7 +53,7 @@ class TrainConfig:
     data: str = ""
     data_weights: tuple[float, ...] = ()
     val_data: str = ""  # empty: validate on the datasets' val split (held-out sequences for synthetic)
-    task: str = "structure"  # structure: I + S + prompt -> JSON; code: I -> part program
+    task: str = "structure"  # structure: I + S + prompt -> JSON; code: I -> part program; parameters: I -> factory parameters
     # One task per data folder (the same folder may be named twice, once per task): one model
     # learns both stages; empty: `task` for every folder.
     data_tasks: tuple[str, ...] = ()
@@ -220,8 +220,8 @@ def validate(cfg: TrainConfig) -> None:
     if cfg.batch_size % cfg.grad_accum:
         raise ConfigError(f"batch_size {cfg.batch_size} is not a multiple of grad_accum {cfg.grad_accum}")
     for task in (cfg.task, *cfg.data_tasks):
-        if task not in ("structure", "code"):
-            raise ConfigError(f"task {task!r}: expected structure or code")
+        if task not in ("structure", "code", "parameters"):
+            raise ConfigError(f"task {task!r}: expected structure, code or parameters")
     folders = [s for s in cfg.data.split(",") if s]
     if cfg.data_tasks and len(cfg.data_tasks) != len(folders):
         raise ConfigError(f"data_tasks names {len(cfg.data_tasks)} tasks for {len(folders)} data folders")

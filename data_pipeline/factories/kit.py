@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 
 from data_pipeline.factories.writer import JointSpec, ProgramWriter, Ref
+from jax3dc.parameters import Draws
 
 WOODS = ("light oak veneer", "walnut", "white painted MDF", "pine", "dark stained birch", "ash")
 METALS = ("brushed steel", "chrome", "black powder-coated steel", "brass", "aluminium")
@@ -22,33 +22,25 @@ GLASSES = ("clear glass", "tinted glass", "frosted glass")
 EPS = 0.002  # clearance between moving parts and their housing (m)
 
 
-def pick(rng: np.random.Generator, options: tuple[str, ...]) -> str:
-    return options[int(rng.integers(len(options)))]
+def wood(w: ProgramWriter, p: Draws, name: str) -> int:
+    """The material of parameter ``name`` (a Choice of WOODS); likewise the four below."""
+    return w.material("Wood", p.choice(name))
 
 
-def wood(w: ProgramWriter, rng: np.random.Generator) -> int:
-    return w.material("Wood", pick(rng, WOODS))
+def metal(w: ProgramWriter, p: Draws, name: str) -> int:
+    return w.material("Metal", p.choice(name))
 
 
-def metal(w: ProgramWriter, rng: np.random.Generator) -> int:
-    return w.material("Metal", pick(rng, METALS))
+def plastic(w: ProgramWriter, p: Draws, name: str) -> int:
+    return w.material("Plastic", p.choice(name))
 
 
-def plastic(w: ProgramWriter, rng: np.random.Generator) -> int:
-    return w.material("Plastic", pick(rng, PLASTICS))
+def fabric(w: ProgramWriter, p: Draws, name: str) -> int:
+    return w.material("Fabric", p.choice(name))
 
 
-def fabric(w: ProgramWriter, rng: np.random.Generator) -> int:
-    return w.material("Fabric", pick(rng, FABRICS))
-
-
-def glass(w: ProgramWriter, rng: np.random.Generator) -> int:
-    return w.material("Glass", pick(rng, GLASSES))
-
-
-def u(rng: np.random.Generator, lo: float, hi: float) -> float:
-    """A dimension drawn uniformly, rounded to the millimetre so programs read cleanly."""
-    return round(float(rng.uniform(lo, hi)), 3)
+def glass(w: ProgramWriter, p: Draws, name: str) -> int:
+    return w.material("Glass", p.choice(name))
 
 
 def carcass(w: ProgramWriter, width: float, depth: float, height: float, t: float, z0: float = 0.0,

@@ -8,8 +8,8 @@ import math
 import numpy as np
 
 from data_pipeline.factories import kit
-from data_pipeline.factories.kit import u
 from data_pipeline.factories.writer import JointSpec, ProgramWriter
+from jax3dc.parameters import Chance as B, Choice as K, Count as C, Draws, Number as N, Schema
 
 
 def _cup(w: ProgramWriter, r_bottom: float, r_top: float, height: float, t: float, z0: float = 0.0):
@@ -18,9 +18,13 @@ def _cup(w: ProgramWriter, r_bottom: float, r_top: float, height: float, t: floa
     return w.lathe(profile, (0.0, 0.0, z0), segments=32)
 
 
-def kitchen_pot(w: ProgramWriter, rng: np.random.Generator) -> None:
-    r, h = u(rng, 0.08, 0.15), u(rng, 0.08, 0.18)
-    steel, grip = kit.metal(w, rng), w.material("Plastic", "black bakelite")
+KITCHEN_POT = Schema("kitchen_pot", (
+    N("radius", 0.08, 0.15), N("height", 0.08, 0.18), K("metal", kit.METALS)))
+
+
+def kitchen_pot(w: ProgramWriter, p: Draws) -> None:
+    r, h = p.number("radius"), p.number("height")
+    steel, grip = kit.metal(w, p, "metal"), w.material("Plastic", "black bakelite")
     body = w.part("body", _cup(w, r, r, h, 0.004), steel)
     for x in (-r - 0.02, r + 0.02):
         w.part("handle", w.box((0.04, 0.025, 0.015), (x, 0.0, 0.8 * h)), grip, parent=body, twin="handle")
@@ -30,9 +34,15 @@ def kitchen_pot(w: ProgramWriter, rng: np.random.Generator) -> None:
            joint=JointSpec("slide", (0.0, 0.0, 1.0), (0.0, 0.0, h + 0.003), (0.0, 0.1)))
 
 
-def kettle(w: ProgramWriter, rng: np.random.Generator) -> None:
-    r, h = u(rng, 0.07, 0.1), u(rng, 0.16, 0.24)
-    shell, base_mat = kit.metal(w, rng) if rng.random() < 0.5 else kit.plastic(w, rng), kit.plastic(w, rng)
+KETTLE = Schema("kettle", (
+    N("radius", 0.07, 0.1), N("height", 0.16, 0.24), B("metal_shell", 0.5), K("shell_metal", kit.METALS),
+    K("shell_plastic", kit.PLASTICS), K("base_plastic", kit.PLASTICS)))
+
+
+def kettle(w: ProgramWriter, p: Draws) -> None:
+    r, h = p.number("radius"), p.number("height")
+    shell, base_mat = (kit.metal(w, p, "shell_metal") if p.chance("metal_shell") else
+                       kit.plastic(w, p, "shell_plastic")), kit.plastic(w, p, "base_plastic")
     z0 = 0.02
     base = w.part("power_base", w.cylinder(1.15 * r, z0, (0.0, 0.0, z0 / 2), segments=32), base_mat)
     top_r = 0.7 * r
@@ -49,9 +59,15 @@ def kettle(w: ProgramWriter, rng: np.random.Generator) -> None:
            joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, lid_r, z0 + h), (0.0, 1.4)))
 
 
-def bucket(w: ProgramWriter, rng: np.random.Generator) -> None:
-    r0, r1, h = u(rng, 0.09, 0.13), u(rng, 0.13, 0.17), u(rng, 0.2, 0.3)
-    shell, bail_mat = kit.plastic(w, rng) if rng.random() < 0.6 else kit.metal(w, rng), kit.metal(w, rng)
+BUCKET = Schema("bucket", (
+    N("bottom_radius", 0.09, 0.13), N("top_radius", 0.13, 0.17), N("height", 0.2, 0.3), B("plastic_shell", 0.6),
+    K("shell_plastic", kit.PLASTICS), K("shell_metal", kit.METALS), K("bail_metal", kit.METALS)))
+
+
+def bucket(w: ProgramWriter, p: Draws) -> None:
+    r0, r1, h = p.number("bottom_radius"), p.number("top_radius"), p.number("height")
+    shell, bail_mat = (kit.plastic(w, p, "shell_plastic") if p.chance("plastic_shell") else
+                       kit.metal(w, p, "shell_metal")), kit.metal(w, p, "bail_metal")
     z_e = 0.85 * h
     r_at = r0 + (r1 - r0) * z_e / h  # wall radius where the bail is hooked on
     r_e = r1 + 0.03
@@ -63,10 +79,15 @@ def bucket(w: ProgramWriter, rng: np.random.Generator) -> None:
            joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, 0.0, z_e), (-1.3, 1.3)))
 
 
-def eyeglasses(w: ProgramWriter, rng: np.random.Generator) -> None:
-    lens_r, gap, oval = u(rng, 0.02, 0.027), u(rng, 0.014, 0.02), u(rng, 1.1, 1.4)
-    frame_mat = kit.plastic(w, rng) if rng.random() < 0.5 else kit.metal(w, rng)
-    lens_mat, rim = kit.glass(w, rng), 0.0025
+EYEGLASSES = Schema("eyeglasses", (
+    N("lens_radius", 0.02, 0.027), N("gap", 0.014, 0.02), N("oval", 1.1, 1.4), B("plastic_frame", 0.5),
+    K("frame_plastic", kit.PLASTICS), K("frame_metal", kit.METALS), K("glass", kit.GLASSES), N("temple_length", 0.12, 0.15)))
+
+
+def eyeglasses(w: ProgramWriter, p: Draws) -> None:
+    lens_r, gap, oval = p.number("lens_radius"), p.number("gap"), p.number("oval")
+    frame_mat = kit.plastic(w, p, "frame_plastic") if p.chance("plastic_frame") else kit.metal(w, p, "frame_metal")
+    lens_mat, rim = kit.glass(w, p, "glass"), 0.0025
     cx = gap / 2 + oval * (lens_r + rim)
     outer = cx + oval * (lens_r + rim)
     rims = [w.scale(w.torus(lens_r + rim, rim, (s * cx, 0.0, 0.0), axis="y", major_segments=32, minor_segments=6),
@@ -82,7 +103,7 @@ def eyeglasses(w: ProgramWriter, rng: np.random.Generator) -> None:
                        (s * cx, 0.0, 0.0))
         w.part("lens", lens, lens_mat, parent=frame, twin="lens")
     t = 0.004
-    length = min(u(rng, 0.12, 0.15), round(2 * (end_x - t) - 0.004, 3))  # folded, it clears the other temple
+    length = min(p.number("temple_length"), round(2 * (end_x - t) - 0.004, 3))  # folded, it clears the other temple
     for s in (-1.0, 1.0):
         inner_x = s * (end_x - t)  # the temple's inner face; it folds inwards about its front inner edge
         temple = w.box((t, length, 0.006), (s * (end_x - t / 2), rim + length / 2, 0.2 * lens_r))
@@ -90,10 +111,15 @@ def eyeglasses(w: ProgramWriter, rng: np.random.Generator) -> None:
                joint=JointSpec("hinge", (0.0, 0.0, s), (inner_x, rim, 0.2 * lens_r), (0.0, 1.571)))
 
 
-def globe(w: ProgramWriter, rng: np.random.Generator) -> None:
-    radius, tilt = u(rng, 0.1, 0.16), 23.5
-    wood, metal, paper = kit.wood(w, rng), kit.metal(w, rng), w.material("Other", "printed paper map")
-    base_h, column = 0.025, u(rng, 0.06, 0.12)
+GLOBE = Schema("globe", (
+    N("radius", 0.1, 0.16), K("wood", kit.WOODS), K("metal", kit.METALS), N("column", 0.06, 0.12),
+    B("wooden_stand", 0.5)))
+
+
+def globe(w: ProgramWriter, p: Draws) -> None:
+    radius, tilt = p.number("radius"), 23.5
+    wood, metal, paper = kit.wood(w, p, "wood"), kit.metal(w, p, "metal"), w.material("Other", "printed paper map")
+    base_h, column = 0.025, p.number("column")
     centre = (0.0, 0.0, base_h + column + radius + 0.012)
     holder_r = radius + 0.012
     a = math.radians(tilt)
@@ -105,7 +131,7 @@ def globe(w: ProgramWriter, rng: np.random.Generator) -> None:
     stand = w.combine(w.cylinder(radius * 0.7, base_h, (0.0, 0.0, base_h / 2), segments=32),
                       w.cylinder(0.01, foot_z - base_h, (foot_x, 0.0, (base_h + foot_z) / 2), segments=12),
                       w.sweep(arc, 0.005, segments=8))
-    stand_id = w.part("stand", stand, wood if rng.random() < 0.5 else metal)
+    stand_id = w.part("stand", stand, wood if p.chance("wooden_stand") else metal)
     ball = w.rotate(w.sphere(radius, centre, segments=32, rings=16), tilt, "y", centre)
     # pins on the rotation axis reach from the ball to the meridian's ends (touching its tube)
     pins = [kit.rod(w, tuple(c + s * 0.97 * radius * a for c, a in zip(centre, axis)),
@@ -115,9 +141,15 @@ def globe(w: ProgramWriter, rng: np.random.Generator) -> None:
            joint=JointSpec("hinge", axis, centre, kit.full_turn()))
 
 
-def desk_fan(w: ProgramWriter, rng: np.random.Generator) -> None:
-    plastic, blade_mat, guard_mat = kit.plastic(w, rng), kit.plastic(w, rng), kit.metal(w, rng)
-    blade_r, stand_h = u(rng, 0.1, 0.16), u(rng, 0.15, 0.3)
+DESK_FAN = Schema("desk_fan", (
+    K("body_plastic", kit.PLASTICS), K("blade_plastic", kit.PLASTICS), K("guard_metal", kit.METALS),
+    N("blade_radius", 0.1, 0.16), N("stand_height", 0.15, 0.3), C("blades", 3, 5)))
+
+
+def desk_fan(w: ProgramWriter, p: Draws) -> None:
+    plastic, blade_mat, guard_mat = (kit.plastic(w, p, "body_plastic"), kit.plastic(w, p, "blade_plastic"),
+                                     kit.metal(w, p, "guard_metal"))
+    blade_r, stand_h = p.number("blade_radius"), p.number("stand_height")
     base = w.combine(w.cylinder(blade_r * 0.9, 0.03, (0.0, 0.0, 0.015), segments=32),
                      w.cylinder(0.015, stand_h, (0.0, 0.0, 0.03 + stand_h / 2), segments=16))
     base_id = w.part("stand", base, plastic)
@@ -139,7 +171,7 @@ def desk_fan(w: ProgramWriter, rng: np.random.Generator) -> None:
     w.part("guard", rings, guard_mat, parent=head)
     blade = w.rotate(w.box((0.04, 0.004, blade_r - 0.02), (0.0, -0.025, hub_z + 0.02 + (blade_r - 0.02) / 2)),
                      20.0, (0.0, 0.0, 1.0), (0.0, -0.025, hub_z))
-    n = int(rng.integers(3, 6))
+    n = p.count("blades")
     rotor = w.combine(w.cylinder(0.022, 0.03, (0.0, -0.025, hub_z), axis="y", segments=16),
                       w.cylinder(0.005, 0.01, (0.0, -0.005, hub_z), axis="y", segments=8),  # shaft into the motor
                       w.radial_array(blade, n, (0.0, -0.025, hub_z), axis="y"))
@@ -147,9 +179,13 @@ def desk_fan(w: ProgramWriter, rng: np.random.Generator) -> None:
            joint=JointSpec("hinge", (0.0, -1.0, 0.0), (0.0, -0.025, hub_z), kit.full_turn()))
 
 
-def printer(w: ProgramWriter, rng: np.random.Generator) -> None:
-    width, depth, height = u(rng, 0.38, 0.5), u(rng, 0.3, 0.42), u(rng, 0.15, 0.25)
-    shell, dark = kit.plastic(w, rng), w.material("Plastic", "dark grey plastic")
+PRINTER = Schema("printer", (
+    N("width", 0.38, 0.5), N("depth", 0.3, 0.42), N("height", 0.15, 0.25), K("shell_plastic", kit.PLASTICS)))
+
+
+def printer(w: ProgramWriter, p: Draws) -> None:
+    width, depth, height = p.number("width"), p.number("depth"), p.number("height")
+    shell, dark = kit.plastic(w, p, "shell_plastic"), w.material("Plastic", "dark grey plastic")
     tray_h, slot_h = 0.03, 0.025
     tray_slot = w.box((width * 0.7, depth * 0.75, tray_h + 0.004), (0.0, -depth / 2 + depth * 0.375 - 0.01, 0.01 + tray_h / 2))
     out_slot = w.box((width * 0.7, 0.06, slot_h), (0.0, -depth / 2 + 0.02, height * 0.55))
@@ -169,10 +205,15 @@ def printer(w: ProgramWriter, rng: np.random.Generator) -> None:
            joint=JointSpec("hinge", (1.0, 0.0, 0.0), (0.0, -depth / 2, bottom), (0.0, 1.571)))
 
 
-def toaster(w: ProgramWriter, rng: np.random.Generator) -> None:
-    width, depth, height = u(rng, 0.25, 0.35), u(rng, 0.14, 0.2), u(rng, 0.17, 0.22)
-    shell, dark = kit.metal(w, rng), w.material("Plastic", "black plastic")
-    slots = int(rng.integers(1, 3))
+TOASTER = Schema("toaster", (
+    N("width", 0.25, 0.35), N("depth", 0.14, 0.2), N("height", 0.17, 0.22), K("shell_metal", kit.METALS),
+    C("slots", 1, 2)))
+
+
+def toaster(w: ProgramWriter, p: Draws) -> None:
+    width, depth, height = p.number("width"), p.number("depth"), p.number("height")
+    shell, dark = kit.metal(w, p, "shell_metal"), w.material("Plastic", "black plastic")
+    slots = p.count("slots")
     cut = [w.box((width * 0.65, 0.035, height * 0.7), (0.0, (i - (slots - 1) / 2) * 0.06, height - height * 0.35 + 0.01))
            for i in range(slots)]
     body = w.part("body", w.difference(w.box((width, depth, height), (0.0, 0.0, height / 2)), *cut), shell)
@@ -186,10 +227,15 @@ def toaster(w: ProgramWriter, rng: np.random.Generator) -> None:
            joint=JointSpec("hinge", (0.0, -1.0, 0.0), (kx, -depth / 2 - 0.006, kz), (0.0, 4.712)))
 
 
-def stapler(w: ProgramWriter, rng: np.random.Generator) -> None:
-    length, width = u(rng, 0.13, 0.2), u(rng, 0.035, 0.05)
-    metal, grip = kit.metal(w, rng), kit.plastic(w, rng)
-    base_h, arm_h = 0.012, u(rng, 0.025, 0.035)
+STAPLER = Schema("stapler", (
+    N("length", 0.13, 0.2), N("width", 0.035, 0.05), K("metal", kit.METALS), K("grip_plastic", kit.PLASTICS),
+    N("arm_height", 0.025, 0.035)))
+
+
+def stapler(w: ProgramWriter, p: Draws) -> None:
+    length, width = p.number("length"), p.number("width")
+    metal, grip = kit.metal(w, p, "metal"), kit.plastic(w, p, "grip_plastic")
+    base_h, arm_h = 0.012, p.number("arm_height")
     base = w.part("base", w.box((width, length, base_h), (0.0, 0.0, base_h / 2)), grip)
     post = w.box((width * 0.8, 0.02, 0.012), (0.0, length / 2 - 0.012, base_h + 0.006))
     w.part("hinge_block", post, metal, parent=base)

@@ -53,7 +53,7 @@ def chamfer(a: np.ndarray, b: np.ndarray) -> float:
     return float((cKDTree(b).query(a)[0].mean() + cKDTree(a).query(b)[0].mean()) / 2)
 
 
-def _surface(parts: Mapping[int, trimesh.Trimesh]) -> np.ndarray:
+def surface_points(parts: Mapping[int, trimesh.Trimesh]) -> np.ndarray:
     whole = trimesh.util.concatenate([m for m in parts.values() if len(m.faces)])
     return np.asarray(whole.sample(SURFACE_SAMPLES, seed=0), dtype=np.float64)
 
@@ -68,7 +68,7 @@ def score_program(key: str, reference: str, predicted: str) -> ProgramScore:
     ious = [box_iou(np.asarray(m.bounds), np.asarray(pred[pid].bounds)) if pid in pred else 0.0
             for pid, m in ref.items()]
     return ProgramScore(key, True, set(pred) == set(ref), abs(len(pred) - len(ref)), float(np.mean(ious)),
-                        chamfer(_surface(ref), _surface(pred)))
+                        chamfer(surface_points(ref), surface_points(pred)))
 
 
 def summarise(scores: Sequence[ProgramScore]) -> dict[str, Any]:

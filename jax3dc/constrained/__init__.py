@@ -4,6 +4,8 @@
 their part ids and joint counts set each row's registers; the tables are built once per tokenizer.
 ``program_constraint`` gives the part-program grammar (SPEC §6) for a batch of stage-1 code
 prompts (the same for every row: a program depends on no prompt text).
+``parameters_constraint`` gives the grammar of factory parameter texts (jax3dc.parameters) for
+a batch of stage-1 parameter prompts, from the schemas the caller passes (the same for every row).
 Pass either to ``jax3dc.generate.decode(..., constraint=...)``.
 
 The promise: for any model and any logits, a row given at least the shortest document's tokens
@@ -82,4 +84,14 @@ def program_constraint(tokenizer, vocab_size: int, rows: int, room: int | Sequen
     return Constraint(program.program_tables(tokenizer, vocab_size), program.initial_rows(rows, _room(room, rows)))
 
 
-__all__ = ["Rows", "Tables", "min_tokens", "program_constraint", "prompt_counts", "structure_constraint"]
+def parameters_constraint(schemas, tokenizer, vocab_size: int, rows: int):
+    """The parameter-text grammar of ``schemas`` (category -> Schema) for ``rows`` rows, as a
+    ``generate.Constraint``."""
+    from jax3dc.constrained import parameters
+    from jax3dc.generate import Constraint
+
+    return Constraint(parameters.parameters_tables(schemas, tokenizer, vocab_size), parameters.initial_rows(rows))
+
+
+__all__ = ["Rows", "Tables", "min_tokens", "parameters_constraint", "program_constraint", "prompt_counts",
+           "structure_constraint"]

@@ -9,6 +9,7 @@ import numpy as np
 from PIL import Image
 
 from data_pipeline.factories import generate_object
+from data_pipeline.factories.registry import SCHEMAS
 from data_pipeline.record import Record, encode_record
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.processing.bpe import config_for_tokenizer
@@ -16,6 +17,7 @@ from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.processing.processor import ImageProcessorConfig
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.palette import object_palette
+from jax3dc.parameters import format_parameters
 from jax3dc.prompt import build_prompt
 from jax3dc.structure import to_json
 
@@ -45,6 +47,7 @@ def record(category: str, seed: int, split: str = "train") -> Record:
     rng = np.random.default_rng(seed)
     return Record(key=f"{category}/{obj.object_id}/0", image_png=png(rng), seg_png=png(rng), prompt=prompt,
                   target=to_json(obj.structure), program=obj.program_text,
+                  parameters=format_parameters(obj.parameters, SCHEMAS[category]),
                   meta={"category": category, "object_id": obj.object_id, "split": split})
 
 
