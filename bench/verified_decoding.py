@@ -34,14 +34,15 @@ apply_gpu_defaults(GENERATION_GPU_FLAGS)
 from data_pipeline.record import Record  # noqa: E402
 from data_pipeline.shards import shard_paths  # noqa: E402
 from eval.baselines import heuristic  # noqa: E402
-from eval.generation import DecodeOptions, Generator, generate_predictions, read_records, reference_of  # noqa: E402
+from eval.records import generate_predictions, read_records, reference_of  # noqa: E402
+from jax3dc.sampler import DecodeOptions, Generator  # noqa: E402
 from eval.metrics.cases import build_cases  # noqa: E402
 from eval.metrics.score import evaluate  # noqa: E402
 from eval.metrics.tables import format_tables  # noqa: E402
 from data_pipeline.record_parts import record_parts  # noqa: E402
-from eval.verified.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, repair  # noqa: E402
-from eval.verified.select import Candidate, Row, _rank, choose, parse_candidate  # noqa: E402
-from eval.verified.stage import candidates_of  # noqa: E402
+from jax3dc.verify.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, repair  # noqa: E402
+from jax3dc.verify.select import Candidate, Row, _rank, choose, parse_candidate  # noqa: E402
+from eval.run_verify import candidates_of  # noqa: E402
 from jax3dc.structure import boxes_from_dict, to_json  # noqa: E402
 
 

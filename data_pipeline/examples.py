@@ -23,10 +23,9 @@ from jax3dc.errors import Jax3dcError
 from jax3dc.processing.chat import encode_chat
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images
 from jax3dc.processing.tokenizer import Tokenizer
-from jax3dc.prompt import chat_messages, code_messages
+from jax3dc.prompt import IMAGES_PER_TASK, chat_messages, code_messages
 
 TASKS = ("structure", "code")
-IMAGES_PER_TASK = {"structure": 2, "code": 1}  # I and S; I alone
 
 
 class UnusableRecord(Jax3dcError):

@@ -10,7 +10,7 @@ image I alone, the interpreter runs it, and eval.metrics.programs compares its p
 of the record's own program (programs.jsonl per object, metrics.json, tables.md).
 
 Generation is grammar-constrained unless ``--unconstrained``. With ``--candidates K`` > 1 or
-``--repair``, a verification stage follows (``eval.verified.stage``): the physics verdict picks
+``--repair``, a verification stage follows (``eval.run_verify``): the physics verdict picks
 among the K candidates and repairs the winner's flagged joints; verified.jsonl says which won,
 why, and what was repaired, and its structures are the ones scored.
 """
@@ -22,7 +22,7 @@ import json
 import os
 from pathlib import Path
 
-from jax3dc.cli import positive_int, positive_float
+from jax3dc.cli_args import positive_int, positive_float
 from jax3dc.errors import InputFileError, Jax3dcError
 
 ALL_SPLITS = "all"  # --split value that reads every shard and keeps every record
@@ -51,7 +51,8 @@ def run_eval(args: argparse.Namespace) -> int:
 
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
     from data_pipeline.shards import shard_paths
-    from eval.generation import DecodeOptions, Generator, generate_predictions, read_records, reference_of
+    from eval.records import generate_predictions, read_records, reference_of
+    from jax3dc.sampler import DecodeOptions, Generator
     from eval.metrics.cases import build_cases, load_predictions
     from eval.metrics.tables import format_tables
     from eval.report import write_report
@@ -101,7 +102,7 @@ def run_eval(args: argparse.Namespace) -> int:
         preds = {key: line["text"] for key, line in lines.items()}
         name = Path(args.checkpoint).name
         if args.candidates > 1 or args.repair:
-            from eval.verified.stage import verify_predictions
+            from eval.run_verify import verify_predictions
 
             preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair,
                                                  source_folders(args.sources))
@@ -126,7 +127,9 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     """The code task: programs from the checkpoint (or --predictions, or the records' own), scored."""
     from tqdm import tqdm
 
-    from eval.generation import DecodeOptions, Generator, generate_predictions
+    from eval.records import generate_predictions
+
+    from jax3dc.sampler import DecodeOptions, Generator
     from eval.metrics.cases import load_predictions
     from eval.metrics.programs import score_program, summarise
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import html
 import io
+import re
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -26,10 +27,13 @@ COLUMNS = (("Parent", "parent_acc", 1), ("Edge F1", "edge_f1", 1), ("Pres. F1", 
 
 
 def page_stem(key: str) -> str:
-    """File stem of a record key (keys hold '/'), as the overlays name theirs."""
-    from eval.report import overlay_name
+    """File stem of a record key (keys hold '/'): its viewer page's, and its overlay's (``overlay_name``)."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", key)
 
-    return overlay_name(key).removesuffix(".png")
+
+def overlay_name(key: str) -> str:
+    """File name of a record's joint overlay."""
+    return page_stem(key) + ".png"
 
 
 def write_thumbnail(image_png: bytes, path: Path) -> None:
@@ -41,7 +45,7 @@ def write_thumbnail(image_png: bytes, path: Path) -> None:
 
 def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], path: Path) -> dict[str, Any]:
     """The viewer of one parsed prediction; returns its physics verdict."""
-    from eval.physics.verdict import check_object
+    from jax3dc.physics.verdict import check_object
     from data_pipeline.record_parts import record_parts
     from jax3dc.export.gltf import gltf_bytes
     from jax3dc.viewer import ViewerInputs, write_viewer

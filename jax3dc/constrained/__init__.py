@@ -10,13 +10,22 @@ Pass either to ``jax3dc.generate.decode(..., constraint=...)``.
 from __future__ import annotations
 
 import re
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
+from jax3dc.constrained import program, structure
 from jax3dc.constrained.structure import ID_LIMIT, Rows, Tables, initial_rows, structure_tables
 from jax3dc.errors import StructureError
 
 _LEGEND_ID = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \|", re.MULTILINE)
 _JOINTS = re.compile(r"^Joints: (\d+)\s*$", re.MULTILINE)
+
+
+class Constraint(NamedTuple):
+    """A grammar on the device: its lifted tables and each row's state; defined here, beside the
+    grammars that build it, so that ``jax3dc.generate`` imports this package and not the reverse."""
+
+    tables: structure.Tables | program.Tables
+    rows: structure.Rows | program.Rows
 
 
 def prompt_counts(prompt: str, where: str = "prompt") -> tuple[int, int]:
@@ -31,10 +40,8 @@ def prompt_counts(prompt: str, where: str = "prompt") -> tuple[int, int]:
 
 
 def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], names: Sequence[str] | None = None):
-    """The structure grammar for these prompts (one row each), as a ``generate.Constraint``;
+    """The structure grammar for these prompts (one row each), as a ``Constraint``;
     ``names`` (e.g. record keys) say which prompt an error is about."""
-    from jax3dc.generate import Constraint
-
     names = list(names) if names is not None else [f"prompt {i}" for i in range(len(prompts))]
     counts = [prompt_counts(p, name) for p, name in zip(prompts, names)]
     for (n, _), name in zip(counts, names):
@@ -45,11 +52,8 @@ def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], nam
 
 
 def program_constraint(tokenizer, vocab_size: int, rows: int):
-    """The part-program grammar for ``rows`` rows, as a ``generate.Constraint``."""
-    from jax3dc.constrained import program
-    from jax3dc.generate import Constraint
-
+    """The part-program grammar for ``rows`` rows, as a ``Constraint``."""
     return Constraint(program.program_tables(tokenizer, vocab_size), program.initial_rows(rows))
 
 
-__all__ = ["Rows", "Tables", "program_constraint", "prompt_counts", "structure_constraint"]
+__all__ = ["Constraint", "Rows", "Tables", "program_constraint", "prompt_counts", "structure_constraint"]

@@ -189,7 +189,7 @@ def checkpoint(tmp_path_factory) -> Path:
 @pytest.mark.slow
 def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoint: Path, tmp_path: Path,
                                                          monkeypatch, capsys) -> None:
-    from eval.generation import Generator
+    from jax3dc.sampler import Generator
 
     out = tmp_path / "report"
     argv = ["eval", "run", "--checkpoint", str(checkpoint), "--data", str(shards), "--out", str(out),
@@ -235,7 +235,8 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
     import jax
 
     from data_pipeline.shards import shard_paths
-    from eval.generation import DecodeOptions, Generator, read_records
+    from eval.records import read_records
+    from jax3dc.sampler import DecodeOptions, Generator
     from jax3dc.generate import GenerationConfig, generate
     from jax3dc.processing.processor import preprocess_images
 
@@ -260,7 +261,7 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
 def test_weights_only_export_falls_back_to_packaged_tokenizer(checkpoint: Path, tmp_path: Path, capsys) -> None:
     import shutil
 
-    from eval.generation import Generator
+    from jax3dc.sampler import Generator
     from jax3dc.processing.processor import ImageProcessorConfig
 
     for path in checkpoint.iterdir():

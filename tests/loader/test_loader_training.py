@@ -31,7 +31,7 @@ def config(dataset: Path, out: Path, steps: int, **kw) -> TrainConfig:
 
 @pytest.mark.slow
 def test_train_on_shards_resume_and_export(dataset: Path, tmp_path: Path) -> None:
-    from eval.generation import Generator
+    from jax3dc.sampler import Generator
     from train.loop import run
 
     whole, losses = [], []

@@ -65,10 +65,10 @@ def test_cli_check_rejects_unusable_input(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_mjx_and_c_give_the_same_penetration_verdicts():
-    from eval.physics.cpu_backend import pair_distances
-    from eval.physics.mjx_backend import mjx_pair_distances
-    from eval.physics.sim_model import SimOptions, build_sim_model
-    from eval.physics.tolerances import PENETRATION_TOL_NU
+    from jax3dc.physics.cpu_backend import pair_distances
+    from jax3dc.physics.mjx_backend import mjx_pair_distances
+    from jax3dc.physics.sim_model import SimOptions, build_sim_model
+    from jax3dc.physics.tolerances import PENETRATION_TOL_NU
 
     structure, parts = _lid_box()
     sim = build_sim_model(structure, parts, 0.5, SimOptions())
@@ -108,7 +108,7 @@ def _sweep_build(tmp_path):
 
 
 def test_sweep_reads_the_scale_the_data_build_writes():
-    from eval.physics.cli import record_scale
+    from eval.physics_sweep import record_scale
 
     assert record_scale({"scale_m_per_nu": 0.32, "object_id": "kettle_1"}) == 0.32
     assert record_scale({"scale": 1.5}) == 1.5

@@ -1,4 +1,4 @@
-"""Typed findings (eval.physics.findings): what the checks produce, how the verdict counts them, and a
+"""Typed findings (jax3dc.physics.findings): what the checks produce, how the verdict counts them, and a
 limit far past the first contact as a failure with the value the joint reaches."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics import ground_truth
-from eval.physics.findings import FAILURE, WARNING, Finding, describe
-from eval.physics.tolerances import LIMIT_PAST_CONTACT_HINGE_RAD
-from eval.physics.verdict import check_object, verdict_json
+from eval.verdict_accuracy import ground_truth
+from jax3dc.physics.findings import FAILURE, WARNING, Finding, describe
+from jax3dc.physics.tolerances import LIMIT_PAST_CONTACT_HINGE_RAD
+from jax3dc.physics.verdict import check_object, verdict_json
 
 
 def test_findings_round_trip_through_json_and_read_as_the_stable_reasons():

@@ -1,4 +1,4 @@
-"""The batched penetration check across objects (``eval.physics.mjx_batch``): its own forward
+"""The batched penetration check across objects (``jax3dc.physics.mjx_batch``): its own forward
 kinematics against C MuJoCo, and padding to size classes and batching many objects against each
 object checked alone at its exact sizes, on every factory category and every PartNet-Mobility
 fixture: the same distances, hence the same verdicts."""
@@ -11,13 +11,13 @@ import jax
 import mujoco
 import numpy as np
 
-from eval.physics.ground_truth import factory_objects, imported_objects
-from eval.physics.mjx_batch import (EXACT, Shapes, _forward, _needed, _padded, batch_pair_distances, narrow_capacity, object_arrays,
+from eval.verdict_accuracy.ground_truth import factory_objects, imported_objects
+from jax3dc.physics.mjx_batch import (EXACT, Shapes, _forward, _needed, _padded, batch_pair_distances, narrow_capacity, object_arrays,
                                     size_class)
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.states import check_states
-from eval.physics.tolerances import DETACH_TOL_NU
-from eval.physics.verdict import findings_from, verdict_json
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.states import check_states
+from jax3dc.physics.tolerances import DETACH_TOL_NU
+from jax3dc.physics.verdict import findings_from, verdict_json
 from tests.physics.test_physics_ground_truth import PARTNET_MOBILITY
 
 

@@ -2,7 +2,7 @@
 
 Its output is garbage, so the structure model's text is an invalid structure and the code
 model's text an invalid program: both must end in the typed errors with the raw text kept. The
-in-memory (I, S) generation must give exactly what eval.generation gives for the same images and
+in-memory (I, S) generation must give exactly what jax3dc.sampler's batched path gives for the same images and
 prompt in a Record. (The test with tiny *trained* models is the lead's.)
 """
 
@@ -35,9 +35,9 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
     import jax
 
     from data_pipeline.record import Record
-    from eval.generation import DecodeOptions, Generator
-    from eval.predict.models import generate_text
-    from eval.predict.pipeline import predict
+    from jax3dc.sampler import DecodeOptions, Generator
+    from jax3dc.predict.models import generate_text
+    from jax3dc.predict.pipeline import predict
     from jax3dc.errors import StructureError
     from jax3dc.prompt import chat_messages
 
@@ -62,7 +62,7 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
 
 @pytest.mark.slow
 def test_code_model_garbage_is_a_program_error_with_the_program_kept(checkpoint, inputs, tmp_path):
-    from eval.predict.pipeline import predict
+    from jax3dc.predict.pipeline import predict
     from jax3dc.errors import ProgramError
 
     with pytest.raises(ProgramError):
@@ -72,8 +72,8 @@ def test_code_model_garbage_is_a_program_error_with_the_program_kept(checkpoint,
 
 
 def test_a_checkpoint_folder_is_loaded_once(tmp_path, monkeypatch):
-    from eval.generation import Generator
-    from eval.predict.pipeline import Checkpoints
+    from jax3dc.sampler import Generator
+    from jax3dc.predict.pipeline import Checkpoints
 
     loads = []
     monkeypatch.setattr(Generator, "load", classmethod(lambda cls, folder, dtype: loads.append(folder) or object()))
