@@ -61,9 +61,6 @@ class SimModel:
     parent_body: np.ndarray  # [J] body id of the moving part's parent
     pieces: dict[int, list[np.ndarray]] = field(default_factory=dict)  # part -> hull vertices (part frame, m)
 
-    def to_model_units(self, k: int, value_nu_or_rad: float) -> float:
-        return value_nu_or_rad * (self.scale if self.joint_type[k] == "slide" else 1.0)
-
 
 def build_sim_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float,
                     options: SimOptions = SimOptions(), pieces: dict[int, list[np.ndarray]] | None = None) -> SimModel:
