@@ -60,7 +60,7 @@ def main() -> None:
             rows[name].append(timed[name])
         print(f"{record.key:45s} parts {len(parts):3d} joints {len(structure.joints()):2d} "
               f"verdict {timed['with dynamics']:.2f} s ({timed['without']:.2f} s without dynamics), "
-              f"ok {verdict['ok']}", flush=True)
+              f"ok {verdict.ok}", flush=True)
     print(f"\n{len(records)} records, seconds per call (mean / median / max):")
     for name, values in rows.items():
         label = "rebuild parts" if name == "parts" else f"verdict {name}"

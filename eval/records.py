@@ -1,6 +1,6 @@
 """Evaluation's side of generation: the records of a split read from ArrayRecord shards, their
 scoring references, and ``predictions.jsonl`` written batch by batch through the core's
-``jax3dc.sampler.Generator``.
+``jax3dc.sampler.Sampler``.
 
 Prompts are sorted longest first so a batch that does not fit shows up at the start. Predictions
 are appended batch by batch (with K > 1, every candidate and its log-likelihood too); a rerun
@@ -22,7 +22,7 @@ from data_pipeline.record import CorruptRecordError, Record
 from data_pipeline.shards import read_shard
 from eval.metrics.cases import Reference
 from jax3dc.errors import InputFileError, StructureError
-from jax3dc.sampler import DecodeOptions, Generator
+from jax3dc.sampler import DecodeOptions, Sampler
 from jax3dc.structure import Box, boxes_from_dict, canonicalize, parse_structure
 
 # A legend line of the SPEC §3 prompt: "id: #rrggbb | cx cy cz | ex ey ez".
@@ -110,7 +110,7 @@ class GenerationStats:
                 f"({rate:.1f} tokens/s, compiles included); {self.unstopped} hit --max-new-tokens")
 
 
-def generate_predictions(generator: Generator, records: Sequence[Record], out_path: Path, batch_size: int,
+def generate_predictions(generator: Sampler, records: Sequence[Record], out_path: Path, batch_size: int,
                          max_new_tokens: int, bucket: int = 64, options: DecodeOptions = DecodeOptions(),
                          task: str = "structure") -> tuple[dict[str, dict[str, Any]], GenerationStats]:
     """Key -> prediction line for every record (``text``: the greedy candidate; ``candidates``

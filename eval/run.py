@@ -52,7 +52,7 @@ def run_eval(args: argparse.Namespace) -> int:
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
     from data_pipeline.shards import shard_paths
     from eval.records import generate_predictions, read_records, reference_of
-    from jax3dc.sampler import DecodeOptions, Generator
+    from jax3dc.sampler import DecodeOptions, Sampler
     from eval.metrics.cases import build_cases, load_predictions
     from eval.metrics.tables import format_tables
     from eval.report import write_report
@@ -91,7 +91,7 @@ def run_eval(args: argparse.Namespace) -> int:
     elif args.reference_as_prediction:
         preds, name = {r.key: r.target for r in records}, "reference"
     else:
-        generator = Generator.load(args.checkpoint, dtype=args.dtype)
+        generator = Sampler.load(args.checkpoint, dtype=args.dtype)
         options = DecodeOptions(constrained=not args.unconstrained, candidates=args.candidates,
                                 temperature=args.temperature, top_p=args.top_p, seed=args.seed)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
@@ -129,7 +129,7 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
 
     from eval.records import generate_predictions
 
-    from jax3dc.sampler import DecodeOptions, Generator
+    from jax3dc.sampler import DecodeOptions, Sampler
     from eval.metrics.cases import load_predictions
     from eval.metrics.programs import score_program, summarise
 
@@ -143,7 +143,7 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     elif args.reference_as_prediction:
         texts, name = {r.key: r.program for r in records}, "reference"
     else:
-        generator = Generator.load(args.checkpoint, dtype=args.dtype)
+        generator = Sampler.load(args.checkpoint, dtype=args.dtype)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
                                             args.max_new_tokens, args.bucket,
                                             DecodeOptions(constrained=not args.unconstrained), "code")

@@ -56,7 +56,7 @@ def verified_line(result: Verified, candidates: Sequence[Candidate]) -> dict[str
                             "ok": row.ok, "flagged": row.flagged, "repairs": []}
     if fixed is not None and fixed.repairs:
         line["text"] = to_json(fixed.structure)
-        line["ok"] = bool(fixed.after.get("ok"))
+        line["ok"] = fixed.after.ok
         line["repairs"] = [r.to_dict() for r in fixed.repairs]
     elif choice.structure is not None:
         line["text"] = to_json(choice.structure)

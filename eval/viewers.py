@@ -20,6 +20,7 @@ from tqdm import tqdm
 
 from eval.metrics.score import Case, Evaluation
 from jax3dc.errors import Jax3dcError
+from jax3dc.physics.findings import Verdict
 
 VIEWERS_DIR = "viewers"
 THUMB_PX = 128
@@ -43,9 +44,9 @@ def write_thumbnail(image_png: bytes, path: Path) -> None:
         thumb.save(path)
 
 
-def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], path: Path) -> dict[str, Any]:
+def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], path: Path) -> Verdict:
     """The viewer of one parsed prediction; returns its physics verdict."""
-    from jax3dc.physics.verdict import check_object
+    from jax3dc.physics.verdict import verdict_with_curves
     from data_pipeline.record_parts import record_parts
     from jax3dc.export.gltf import gltf_bytes
     from jax3dc.viewer import ViewerInputs, write_viewer
@@ -54,9 +55,9 @@ def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], pa
         parts, scale, mounted = record_parts(record, sources)
     except KeyError as e:  # a record from before the build wrote what rebuilding needs
         raise Jax3dcError(f"record {case.key}: cannot rebuild its parts: no meta field {e}") from None
-    verdict = check_object(case.prediction, parts, scale, mounted=mounted)
+    verdict = verdict_with_curves(case.prediction, parts, scale, mounted=mounted)[0]
     glb = gltf_bytes(case.prediction, parts, scale)
-    write_viewer(ViewerInputs(glb, case.key, case.key, verdict, record.image_png, record.seg_png), path)
+    write_viewer(ViewerInputs(glb, case.key, case.key, verdict.to_json(), record.image_png, record.seg_png), path)
     return verdict
 
 
@@ -81,8 +82,8 @@ def write_viewers(cases: Sequence[Case], records: Mapping[str, Any], folder: Pat
             continue
         entry.pop("why")
         entry["viewer"] = f"{page_stem(case.key)}.html"
-        flagged = [k for k, j in sorted(verdict["joints"].items(), key=lambda kv: int(kv[0])) if not j["ok"]]
-        entry["physics"] = "PASS" if verdict["ok"] else "FAIL" + (
+        flagged = [str(part) for part in sorted(verdict.failed_joints)]
+        entry["physics"] = "PASS" if verdict.ok else "FAIL" + (
             f" (joints of parts {', '.join(flagged)} flagged)" if flagged else "")
     return done
 

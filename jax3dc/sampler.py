@@ -65,10 +65,11 @@ class DecodeOptions:
 class Sample:
     """One generated candidate."""
 
-    text: str
+    text: str  # every generated token decoded (a tokenizer may spell out the stop token)
     new_tokens: int
     stopped: bool  # ended on a stop token (not cut at max_new_tokens)
     logprob: float
+    reply: str = ""  # the tokens before the stop token: the model's answer as predict reads it
 
     def to_dict(self) -> dict[str, Any]:
         return {"text": self.text, "new_tokens": self.new_tokens, "stopped": self.stopped, "logprob": round(self.logprob, 4)}
@@ -85,8 +86,11 @@ class Prompt:
 
 
 @dataclass(frozen=True)
-class Generator:
-    """A loaded checkpoint: model, its config, tokenizer and image processor settings."""
+class Sampler:
+    """A loaded checkpoint (model, its config, tokenizer and image processor settings) and the one
+    way to decode with it: ``generate_batch`` serves ``eval run`` (batches of records), ``predict``
+    and the demo (one in-memory image at a time), greedy or with sampled candidates, under a
+    task's grammar or not."""
 
     model: Any
     config: Any
@@ -94,7 +98,7 @@ class Generator:
     processor: Any
 
     @classmethod
-    def load(cls, checkpoint: str | Path, dtype: str = "bfloat16") -> "Generator":
+    def load(cls, checkpoint: str | Path, dtype: str = "bfloat16") -> "Sampler":
         checkpoint = Path(checkpoint)
         if not (checkpoint / "config.json").is_file():
             raise InputFileError(checkpoint, "not a checkpoint folder (no config.json)")
@@ -168,8 +172,9 @@ class Generator:
 
         def sample(i: int) -> Sample:
             n = int(lengths[i])
-            return Sample(self.tokenizer.decode(tokens[i, :n].tolist()), n,
-                          bool(n) and int(tokens[i, n - 1]) in special.stop_ids, float(logprobs[i]))
+            stopped = bool(n) and int(tokens[i, n - 1]) in special.stop_ids
+            return Sample(self.tokenizer.decode(tokens[i, :n].tolist()), n, stopped, float(logprobs[i]),
+                          self.tokenizer.decode(tokens[i, :n - stopped].tolist()))
 
         return [[sample(r * k + c) for c in range(k)] for r in range(len(prompts))]
 

@@ -2,11 +2,12 @@
 
 A finding names its check, its severity, the joints at fault (by their child part's id), the other
 parts involved, a depth or distance (nu), the joint values it was found at and, for a limit, the
-value the joint does reach. The verdict's pass/fail counts failures only; a warning is something a
+value the joint does reach. A ``Verdict`` holds one object's findings and is what the chooser,
+the repairer and predict pass around; its pass/fail counts failures only; a warning is something a
 user may want to act on that a simulator still runs (a ground-truth limit a few degrees past the
 first contact: the joint stops there, ``reachable``), and combination interpenetration (real
 objects have dependent joints). ``describe`` turns a finding into the short reason strings of the
-verdict JSON (see ``jax3dc.physics.verdict``), for reports, the CLI and the viewer.
+verdict JSON (``Verdict.to_json``, see ``jax3dc.physics.verdict``), for reports, the CLI and the viewer.
 """
 
 from __future__ import annotations
@@ -153,3 +154,53 @@ def describe(finding: Finding) -> str:
     if f.check == "sag":
         return f"sags under gravity by {f.depth:.3f}"
     return f"unstable under gravity: root moved {f.depth:.3f} nu, tilted {f.tilt:.2f} rad"
+
+
+OBJECT_CHECKS = {"rest": "rest", "combination": "combinations", "gravity": "gravity"}  # check -> key of "checks"
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One object's verdict: the joints checked (their child part ids) and every finding, in the
+    order the checks found them. Only failures fail a joint or the object."""
+
+    joint_parts: tuple[int, ...]
+    findings: tuple[Finding, ...]
+    gravity_checked: bool = True  # the gravity test ran (the JSON then has its "gravity" list)
+
+    @property
+    def ok(self) -> bool:
+        return not any(f.severity == FAILURE for f in self.findings)
+
+    @property
+    def failed_joints(self) -> frozenset[int]:
+        """The joints a failure is blamed on."""
+        return frozenset(f.joints[0] for f in self.findings if f.severity == FAILURE and f.check not in OBJECT_CHECKS)
+
+    @property
+    def flagged(self) -> int:
+        """How many joints fail."""
+        return len(self.failed_joints)
+
+    def merit(self) -> tuple[bool, int]:
+        """Larger is better: the object passes, then fewer failing joints."""
+        return self.ok, -self.flagged
+
+    def to_json(self) -> dict[str, Any]:
+        """The verdict JSON: "ok", per joint "ok", its failure "reasons" and its "warnings",
+        object-level "checks" (rest, combinations, gravity when it ran) as reason strings, and the
+        typed "findings" themselves."""
+        joints = {str(p): {"ok": True, "reasons": [], "warnings": []} for p in self.joint_parts}
+        checks: dict[str, list[str]] = {"rest": [], "combinations": []}
+        if self.gravity_checked:
+            checks["gravity"] = []
+        for f in self.findings:
+            if f.check in OBJECT_CHECKS:
+                checks[OBJECT_CHECKS[f.check]].append(describe(f))
+                continue
+            joint = joints[str(f.joints[0])]
+            joint["reasons" if f.severity == FAILURE else "warnings"].append(describe(f))
+            joint["ok"] = not joint["reasons"]
+        checks["rest"].sort()
+        checks["combinations"].sort()
+        return {"ok": self.ok, "joints": joints, "checks": checks, "findings": [f.to_json() for f in self.findings]}

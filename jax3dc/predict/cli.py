@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from jax3dc.predict.models import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.cli_args import positive_int
+from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS
 from jax3dc.release import default_structure_model
 

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from jax3dc.physics.verdict import check_object
 from jax3dc.export.blender import export_blender
 from jax3dc.export.gltf import export_gltf
 from jax3dc.export.mjcf import export_mjcf
@@ -62,11 +61,10 @@ def _plain(value):
     return value
 
 
-def write_physics(structure: Structure, parts: dict[int, trimesh.Trimesh], out: Path,
-                  scale: float, mounted: bool = False) -> tuple[Path, dict]:
-    """physics.json: the plausibility verdict (ok, per-joint reasons, checks) of the object, its root
-    held when ``mounted`` (``write_exports`` has refused an object too large for it)."""
-    verdict = _plain(check_object(structure, parts, scale, mounted=mounted))
+def write_physics(verdict: dict, out: Path) -> tuple[Path, dict]:
+    """physics.json: the object's plausibility verdict (ok, per-joint reasons, checks), computed by
+    the caller's VerdictCache (``write_exports`` has refused an object too large for it)."""
+    verdict = _plain(verdict)
     path = out / "physics.json"
     path.write_text(json.dumps(verdict, indent=1, sort_keys=True) + "\n", encoding="utf-8")
     return path, verdict

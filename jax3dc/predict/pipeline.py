@@ -24,29 +24,31 @@ import hashlib
 import json
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import numpy as np
 from PIL import Image
 from tqdm import tqdm
 
-from jax3dc.render import Camera, png_bytes
-from jax3dc.structure.reply import json_text
-from jax3dc.predict.models import DEFAULT_MAX_NEW_TOKENS, TextModel, code_model, structure_candidates, structure_model
+from jax3dc.errors import InputFileError, Jax3dcError, StructureError
+from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.palette import object_palette
+from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
+from jax3dc.predict.models import TextModel, code_model, structure_candidates, structure_model
 from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
 from jax3dc.predict.report import ReportInputs, write_report
 from jax3dc.predict.segmentation import default_camera, render_segmentation
 from jax3dc.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_mesh, stage1_from_parts_dir,
-                                 stage1_from_program)
-from jax3dc.errors import InputFileError, Jax3dcError, StructureError
-from jax3dc.geometry.parts import part_boxes, save_parts
+                                  stage1_from_program)
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
-from jax3dc.palette import object_palette
 from jax3dc.prompt import CODE_PROMPT, build_prompt
+from jax3dc.render import Camera, png_bytes
+from jax3dc.sampler import Sampler
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
-
-if TYPE_CHECKING:
-    from jax3dc.sampler import Generator
+from jax3dc.structure.reply import json_text
+from jax3dc.verify.repair import repair
+from jax3dc.verify.select import Candidate, choose
+from jax3dc.verify.verdicts import Physics, VerdictCache
 
 MAX_SEG_SIDE = 1024  # px; S has the image's size and aspect, its longer side at most this
 PALETTE_CATEGORY = "image"  # palette seed: "image/<sha256 of the image>", the same image gets the same colours
@@ -92,25 +94,23 @@ class Checkpoints:
 
     def __init__(self, dtype: str):
         self.dtype = dtype
-        self.loaded: dict[Path, Generator] = {}
+        self.loaded: dict[Path, Sampler] = {}
 
-    def get(self, folder: str | Path) -> "Generator":
-        from jax3dc.sampler import Generator
-
+    def get(self, folder: str | Path) -> Sampler:
         key = Path(folder).resolve()
         if key not in self.loaded:
-            self.loaded[key] = Generator.load(folder, self.dtype)
+            self.loaded[key] = Sampler.load(folder, self.dtype)
         return self.loaded[key]
 
 
-def program_text(image: Image.Image, code_model_dir: str | Path | None, generate_program: TextModel | None,
+def program_text(image_png: bytes, code_model_dir: str | Path | None, generate_program: TextModel | None,
                  max_new_tokens: int, checkpoints: Checkpoints, constrained: bool = True) -> str:
-    """The code model's part program for ``image`` (its prompt is jax3dc.prompt.CODE_PROMPT),
+    """The code model's part program for image I (``image_png``; its prompt is jax3dc.prompt.CODE_PROMPT),
     decoded under the part-program grammar unless ``constrained`` is off."""
     if generate_program is None:
         if code_model_dir is None:
             raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
-        generate_program = code_model(checkpoints.get(code_model_dir), image, max_new_tokens, constrained)
+        generate_program = code_model(checkpoints.get(code_model_dir), image_png, max_new_tokens, constrained)
     return generate_program(CODE_PROMPT)
 
 
@@ -151,26 +151,23 @@ class _Progress:
         self.bar.refresh()
 
 
-def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, metres: float, mounted: bool,
-            outputs: _Outputs) -> str:
-    """The candidate the physics verdict prefers; candidates.json holds every one's row and the reason."""
-    from jax3dc.verify.select import Candidate, choose
-
+def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, check: VerdictCache,
+            outputs: _Outputs) -> tuple[str, Structure | None]:
+    """The candidate the physics verdict prefers, as text and, when it parses, as the canonical
+    structure ``choose`` made of it; candidates.json holds every one's row and the reason."""
     candidates = [Candidate(text, logprob) for text, logprob in replies]
-    choice = choose(candidates, parts.keys(), parts, metres, mounted, boxes)
+    physics = check.physics
+    choice = choose(candidates, parts.keys(), parts, physics.scale, physics.mounted, boxes, check=check)
     rows = [{"parsed": r.parsed, "rule": r.rule, "physics_ok": r.ok, "flagged_joints": r.flagged, "logprob": round(r.logprob, 4),
              "text": c.text} for r, c in zip(choice.rows, candidates)]
     doc = {"winner": choice.index, "reason": choice.reason, "candidates": rows}
     outputs.text("candidates", "candidates.json", json.dumps(doc, indent=1) + "\n")
-    return candidates[choice.index].text
+    return candidates[choice.index].text, choice.structure
 
 
-def _repaired(structure: Structure, parts: dict, boxes: dict, metres: float, mounted: bool,
-              outputs: _Outputs) -> Structure:
+def _repaired(structure: Structure, parts: dict, boxes: dict, check: VerdictCache, outputs: _Outputs) -> Structure:
     """``structure`` with flagged hinges repaired where the verdict improves; repairs.json lists them."""
-    from jax3dc.verify.repair import repair
-
-    fixed = repair(structure, parts, metres, mounted, boxes)
+    fixed = repair(structure, parts, check.physics.scale, check.physics.mounted, boxes, check=check)
     outputs.text("repairs", "repairs.json", json.dumps([r.to_dict() for r in fixed.repairs], indent=1) + "\n")
     return fixed.structure
 
@@ -202,7 +199,7 @@ def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, 
     else:
         outputs.binary("image", "image.png", image_png)
     if backend == CODE:
-        program = program_text(rgb, code_model_dir, generate_program, max_new_tokens, checkpoints, constrained)
+        program = program_text(image_png, code_model_dir, generate_program, max_new_tokens, checkpoints, constrained)
         outputs.text("program", "program.txt", program)  # kept even when it fails to run
         parts_in = stage1_from_program(program)
     elif backend == MESH:
@@ -212,36 +209,40 @@ def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, 
     return rgb, image_png, digest, parts_in
 
 
-def _stage2(result: PredictResult, rgb: Image.Image, seg: np.ndarray, boxes: dict, settings: _StructureSettings,
+def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict, settings: _StructureSettings,
             checkpoints: Checkpoints, outputs: _Outputs, progress: _Progress) -> None:
     """Structure model -> structure.json, exports and physics.json, filling ``result``; raises a
-    Jax3dcError at the first step that fails (the outputs before it stay)."""
+    Jax3dcError at the first step that fails (the outputs before it stay). The winner of several
+    candidates is parsed once, and each structure's verdict computed once (one VerdictCache serves
+    the choice, the repair and physics.json)."""
     progress.step("structure model")
     parts_in = result.stage1
     metres = settings.scale if settings.scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
+    check = VerdictCache(Physics(parts_in.parts, metres, settings.mounted))
     generate = settings.generate
+    structure = None
     if generate is None:
         if settings.model_dir is None:
             raise InputFileError("--structure-model", "a structure model checkpoint (--structure-model DIR) is needed")
-        generator = checkpoints.get(settings.model_dir)
-        seg_image = Image.fromarray(seg)
+        sampler = checkpoints.get(settings.model_dir)
         if settings.candidates > 1:
-            replies = structure_candidates(generator, rgb, seg_image, settings.max_new_tokens, settings.candidates,
+            replies = structure_candidates(sampler, image_png, seg_png, settings.max_new_tokens, settings.candidates,
                                            settings.constrained)(result.prompt)
-            result.raw_text = _chosen(replies, parts_in.parts, boxes, metres, settings.mounted, outputs)
+            result.raw_text, structure = _chosen(replies, parts_in.parts, boxes, check, outputs)
         else:
-            generate = structure_model(generator, rgb, seg_image, settings.max_new_tokens, settings.constrained)
+            generate = structure_model(sampler, image_png, seg_png, settings.max_new_tokens, settings.constrained)
     if result.raw_text is None:
         result.raw_text = generate(result.prompt)
-    try:
-        parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
-    except StructureError as e:
-        raw = outputs.text("structure_raw", "structure_raw.txt", result.raw_text)
-        raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in {raw})") from None
+    if structure is None:
+        try:
+            parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
+        except StructureError as e:
+            raw = outputs.text("structure_raw", "structure_raw.txt", result.raw_text)
+            raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in {raw})") from None
+        structure = canonicalize(parsed, boxes)
     progress.step("exports")
-    structure = canonicalize(parsed, boxes)
     if settings.repair:
-        structure = _repaired(structure, parts_in.parts, boxes, metres, settings.mounted, outputs)
+        structure = _repaired(structure, parts_in.parts, boxes, check, outputs)
     outputs.text("structure", "structure.json", to_json(structure))
     result.structure = structure
     named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
@@ -249,7 +250,7 @@ def _stage2(result: PredictResult, rgb: Image.Image, seg: np.ndarray, boxes: dic
     for name, path in write_exports(named, parts_in.parts, outputs.out, metres, settings.mounted).items():
         outputs.wrote(name, path)
     progress.step("physics")
-    path, result.verdict = write_physics(structure, parts_in.parts, outputs.out, metres, settings.mounted)
+    path, result.verdict = write_physics(check(structure).to_json(), outputs.out)
     outputs.wrote("physics", path)
 
 
@@ -263,7 +264,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     """Runs both stages on ``image`` and writes every output into ``out``.
 
     ``stage1``: "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1). ``structure_model_dir`` / ``code_model_dir``: checkpoint
-    folders (``jax3dc.sampler.Generator.load``); ``generate_structure`` (SPEC §3 prompt text ->
+    folders (``jax3dc.sampler.Sampler.load``); ``generate_structure`` (SPEC §3 prompt text ->
     structure JSON text, seeing I and S) and ``generate_program`` (the code prompt -> part program
     text, seeing I) replace them. ``camera``: the image's camera in the normalised frame (default:
     a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
@@ -310,7 +311,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
 
         error: Jax3dcError | None = None
         try:
-            _stage2(result, rgb, seg, boxes, settings, checkpoints, outputs, steps)
+            _stage2(result, image_png, seg_png, boxes, settings, checkpoints, outputs, steps)
         except Jax3dcError as e:
             error = e
         steps.step("report")

@@ -28,11 +28,12 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from jax3dc.physics.findings import Verdict
 from jax3dc.physics.guides import welded
 from jax3dc.physics.tolerances import ATTACH_TOL_NU
-from jax3dc.verify.verdicts import Physics, VerdictCache, flagged, merit
 from jax3dc.structure import Box, Joint, Structure, canonicalize, parse_structure, to_json
 from jax3dc.structure.serialize import joint_to_dict
+from jax3dc.verify.verdicts import Physics, VerdictCache
 
 FLIPPED = "axis flipped"
 PIVOT = "pivot moved"
@@ -65,21 +66,22 @@ class Repair:
 class Repaired:
     structure: Structure  # canonical
     repairs: tuple[Repair, ...]
-    before: dict[str, Any]  # verdict of the structure as given
-    after: dict[str, Any]  # verdict of the repaired structure
+    before: Verdict  # of the structure as given
+    after: Verdict  # of the repaired structure
 
 
 def repair(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, mounted: bool,
            boxes: Mapping[int, Box], backend: str = "c", dynamics: bool = True, threads: int | None = None,
-           kinds: frozenset[str] = DEFAULT_KINDS) -> Repaired:
+           kinds: frozenset[str] = DEFAULT_KINDS, check: VerdictCache | None = None) -> Repaired:
     """``structure`` with its flagged joints repaired where an alternative improves the verdict;
-    ``kinds``: the alternatives tried (FLIPPED, PIVOT, SWAPPED; a pivot moved and flipped needs both)."""
-    check = VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))
+    ``kinds``: the alternatives tried (FLIPPED, PIVOT, SWAPPED; a pivot moved and flipped needs both);
+    ``check``: a caller's cache of these parts' verdicts (the choice's, reused)."""
+    check = check or VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))
     current = _written(structure, boxes)
     before = verdict = check(current)
     repairs: list[Repair] = []
-    for part in sorted(int(p) for p, j in before["joints"].items() if not j["ok"]):
-        if verdict["ok"] or verdict["joints"][str(part)]["ok"]:  # an earlier repair settled it
+    for part in sorted(before.failed_joints):
+        if verdict.ok or part not in verdict.failed_joints:  # an earlier repair settled it
             continue
         joint = current.nodes[part].joint
         best = None
@@ -90,9 +92,9 @@ def repair(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float
             if candidate.nodes[part].joint is None:  # written with 3 decimals it cannot move
                 continue
             found = check(candidate)
-            if merit(found) > merit(best[2] if best else verdict):
+            if found.merit() > (best[2] if best else verdict).merit():
                 best = (kind, candidate, found)
-                if found["ok"]:
+                if found.ok:
                     break
         if best is not None:
             kind, current, found = best
@@ -185,6 +187,6 @@ def _with_joint(structure: Structure, part: int, joint: Joint) -> Structure:
     return replace(structure, nodes=nodes)
 
 
-def _change(before: dict[str, Any], after: dict[str, Any]) -> str:
-    state = "object passes" if after["ok"] else "object still fails"
-    return f"flagged joints {flagged(before)} -> {flagged(after)}; {state}"
+def _change(before: Verdict, after: Verdict) -> str:
+    state = "object passes" if after.ok else "object still fails"
+    return f"flagged joints {before.flagged} -> {after.flagged}; {state}"

@@ -11,14 +11,13 @@ from __future__ import annotations
 
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
-
 import trimesh
 
-from jax3dc.structure.reply import json_text
-from jax3dc.verify.verdicts import Physics, VerdictCache, flagged, merit
 from jax3dc.errors import StructureError
+from jax3dc.physics.findings import Verdict
 from jax3dc.structure import Box, Structure, canonicalize, parse_structure
+from jax3dc.structure.reply import json_text
+from jax3dc.verify.verdicts import Physics, VerdictCache
 
 
 @dataclass(frozen=True)
@@ -36,7 +35,7 @@ class Row:
     ok: bool | None
     flagged: int | None
     logprob: float
-    verdict: dict[str, Any] | None
+    verdict: Verdict | None
 
 
 @dataclass(frozen=True)
@@ -54,11 +53,12 @@ def parse_candidate(text: str, part_ids: Collection[int], boxes: Mapping[int, Bo
 
 def choose(candidates: Sequence[Candidate], part_ids: Collection[int], parts: dict[int, trimesh.Trimesh],
            scale: float, mounted: bool, boxes: Mapping[int, Box], backend: str = "c", dynamics: bool = True,
-           threads: int | None = None) -> Choice:
-    """The best candidate by the order of the module docstring (ties: the earlier candidate)."""
+           threads: int | None = None, check: VerdictCache | None = None) -> Choice:
+    """The best candidate by the order of the module docstring (ties: the earlier candidate);
+    ``check``: a caller's cache of these parts' verdicts, so later steps reuse the winner's."""
     if not candidates:
         raise ValueError("choose needs at least one candidate")
-    check = VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))
+    check = check or VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))
     rows, structures = [], []
     for candidate in candidates:
         try:
@@ -68,7 +68,7 @@ def choose(candidates: Sequence[Candidate], part_ids: Collection[int], parts: di
             structures.append(None)
             continue
         verdict = check(structure)
-        rows.append(Row(True, None, bool(verdict["ok"]), flagged(verdict), candidate.logprob, verdict))
+        rows.append(Row(True, None, verdict.ok, verdict.flagged, candidate.logprob, verdict))
         structures.append(structure)
     ranked = sorted(range(len(rows)), key=lambda i: _rank(rows[i]), reverse=True)
     return Choice(ranked[0], structures[ranked[0]], tuple(rows), _reason(rows, ranked))
@@ -77,7 +77,7 @@ def choose(candidates: Sequence[Candidate], part_ids: Collection[int], parts: di
 def _rank(row: Row) -> tuple:
     if not row.parsed:
         return (False, False, 0, row.logprob)
-    return (True, *merit(row.verdict), row.logprob)
+    return (True, *row.verdict.merit(), row.logprob)
 
 
 def _reason(rows: list[Row], ranked: list[int]) -> str:

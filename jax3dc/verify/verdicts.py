@@ -10,11 +10,11 @@ little and lose the checks that catch unreachable limits and objects that fall o
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import trimesh
 
-from jax3dc.physics.verdict import check_object_with_curves
+from jax3dc.physics.findings import Verdict
+from jax3dc.physics.verdict import verdict_with_curves
 from jax3dc.structure import Structure, to_json
 
 
@@ -33,9 +33,9 @@ class Physics:
     dynamics: bool = True
     threads: int | None = None
 
-    def verdict(self, structure: Structure) -> dict[str, Any]:
-        return check_object_with_curves(structure, self.parts, self.scale, self.backend, self.dynamics,
-                                        self.mounted, self.threads)[0]
+    def verdict(self, structure: Structure) -> Verdict:
+        return verdict_with_curves(structure, self.parts, self.scale, self.backend, self.dynamics,
+                                   self.mounted, self.threads)[0]
 
 
 class VerdictCache:
@@ -43,20 +43,11 @@ class VerdictCache:
 
     def __init__(self, physics: Physics):
         self.physics = physics
-        self._seen: dict[str, dict[str, Any]] = {}
+        self._seen: dict[str, Verdict] = {}
 
-    def __call__(self, structure: Structure) -> dict[str, Any]:
+    def __call__(self, structure: Structure) -> Verdict:
         key = to_json(structure)
         if key not in self._seen:
             self._seen[key] = self.physics.verdict(structure)
         return self._seen[key]
 
-
-def flagged(verdict: dict[str, Any]) -> int:
-    """How many joints the verdict flags."""
-    return sum(not joint["ok"] for joint in verdict["joints"].values())
-
-
-def merit(verdict: dict[str, Any]) -> tuple[bool, int]:
-    """Larger is better: the object passes, then fewer flagged joints."""
-    return bool(verdict["ok"]), -flagged(verdict)

@@ -27,5 +27,5 @@ def test_workers_agree_with_one_process_and_repair_failing_winners(checked_recor
                         v.repaired and v.repaired.repairs) for v in alone]
     first, lone, door_done = pooled
     assert first.choice.index == 1 and first.repaired is None  # the winner passes: nothing to repair
-    assert not lone.choice.rows[0].ok and lone.repaired.after["ok"] and lone.repaired.repairs
+    assert not lone.choice.rows[0].ok and lone.repaired.after.ok and lone.repaired.repairs
     assert door_done.choice.rows[0].ok and door_done.repaired is None
