@@ -45,7 +45,7 @@ def main() -> None:
     from jax3dc.physics.sim_model import SimOptions, build_sim_model
     from jax3dc.physics.states import check_states
     from jax3dc.physics.tolerances import (DETACH_TOL_NU, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU, PENETRATION_TOL_NU,
-                                         RECONTACT_DEPTH_NU)
+                                           RECONTACT_DEPTH_NU)
 
     threads = os.cpu_count() or 1
     print(f"devices: {jax.devices()} | C rollout threads: {threads} | {SETTLE_STEPS} steps per rollout", flush=True)

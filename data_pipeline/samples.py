@@ -18,7 +18,7 @@ from data_pipeline.factories import generate_object
 from data_pipeline.record import Record
 from data_pipeline.views import sample_view_pose
 from jax3dc.render import (APPEARANCES, PartRenderer, paint_segmentation, part_rgba, png_bytes, sample_appearance,
-                                  sample_camera, sample_lighting, sample_view_lighting, vary_camera)
+                           sample_camera, sample_lighting, sample_view_lighting, vary_camera)
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt

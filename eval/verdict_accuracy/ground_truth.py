@@ -82,7 +82,7 @@ def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, tri
     by state over random states of all joints (a new parent welded to the old one moves the same).
     """
     from jax3dc.physics.kinematics import (SAME_MOTION_TOL_NU, same_line, subtree_points, subtree_vertices_at,
-                                         sweep_distance, symmetric_about)
+                                           sweep_distance, symmetric_about)
     before, after = original.nodes[mutation.part], mutation.structure.nodes[mutation.part]
     if before.parent != after.parent:
         a = subtree_vertices_at(original, parts, mutation.part)

@@ -21,8 +21,8 @@ from jax3dc.physics.findings import FAILURE, WARNING, Finding
 from jax3dc.physics.sim_model import SimModel, SimOptions, build_sim_model
 from jax3dc.physics.states import StateBatch
 from jax3dc.physics.tolerances import (GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT, GRAVITY_TILT_RAD, LIMIT_PAST_CONTACT_HINGE_RAD,
-                                     LIMIT_PAST_CONTACT_SLIDE_FRACTION, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU,
-                                     REACH_CANDIDATE_NU)
+                                       LIMIT_PAST_CONTACT_SLIDE_FRACTION, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU,
+                                       REACH_CANDIDATE_NU)
 from jax3dc.structure.schema import Structure
 
 SETTLE_STEPS = 400  # 0.8 s at the model's 2 ms step

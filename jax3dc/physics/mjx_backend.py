@@ -298,7 +298,3 @@ class PairDistances:
 def compile_pair_distances(model: mujoco.MjModel) -> PairDistances:
     """The batched check for ``model`` (kept as the name callers use): a callable qpos [S, nq] -> [S, nbody, nbody]."""
     return PairDistances(model)
-
-
-def mjx_pair_distances(model: mujoco.MjModel, qpos: np.ndarray) -> np.ndarray:
-    return np.asarray(PairDistances(model)(qpos), dtype=np.float64)

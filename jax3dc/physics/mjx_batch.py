@@ -31,7 +31,7 @@ import mujoco
 import numpy as np
 
 from jax3dc.physics.mjx_backend import (BOX_SLACK_M, CHUNK_ITEMS, MIN_CAPACITY, SMALL_HULL_VERTICES, _boxes_overlap,
-                                      _candidate_pairs, _cross, _dot, _hull, penetration_depth)
+                                        _candidate_pairs, _cross, _dot, _hull, penetration_depth)
 
 HINGE, SLIDE = 1, 2  # body joint kinds in the arrays (0: welded to its parent)
 TIER_CLASSES = ((0, 0), (0, 1), (1, 1))  # pair classes by the size tiers of their two hulls (the smaller first)

@@ -37,7 +37,7 @@ from jax3dc.physics.relations import relation_disagreements
 from jax3dc.physics.sim_model import SimModel, SimOptions, build_sim_model
 from jax3dc.physics.states import StateBatch, check_states
 from jax3dc.physics.tolerances import (ATTACH_TOL_NU, DETACH_TOL_NU, PENETRATION_TOL_NU, REST_CONTACT_TOL_NU, RECONTACT_DEPTH_NU,
-                                     REST_PENETRATION_TOL_NU, LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
+                                       REST_PENETRATION_TOL_NU, LIFT_OFF_MAX_NU, SLIDE_GUIDE_OVERLAP_NU)
 from jax3dc.export.assembly import frames_nu, tree_order
 from jax3dc.structure.schema import Structure
 

@@ -39,7 +39,7 @@ from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_pa
 from jax3dc.predict.report import ReportInputs, write_report
 from jax3dc.predict.segmentation import default_camera, render_segmentation
 from jax3dc.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_mesh, stage1_from_parts_dir,
-                                  stage1_from_program)
+                                   stage1_from_program)
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.render import Camera, png_bytes

@@ -13,7 +13,7 @@ import numpy as np
 
 from eval.verdict_accuracy.ground_truth import factory_objects, imported_objects
 from jax3dc.physics.mjx_batch import (EXACT, Shapes, _forward, _needed, _padded, batch_pair_distances, narrow_capacity, object_arrays,
-                                    size_class)
+                                      size_class)
 from jax3dc.physics.sim_model import SimOptions, build_sim_model
 from jax3dc.physics.states import check_states
 from jax3dc.physics.tolerances import DETACH_TOL_NU
