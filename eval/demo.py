@@ -26,10 +26,24 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+import mujoco
+
 from data_pipeline import tokenizer_cli
 from data_pipeline.build import BuildConfig, factory_sources, run_build
+from data_pipeline.factories import generate_object
+from data_pipeline.shards import shard_paths
 from eval import cli as eval_cli
+from eval.records import read_records
 from jax3dc.errors import Jax3dcError
+from jax3dc.export.blender import export_blender
+from jax3dc.export.gltf import export_gltf
+from jax3dc.export.mjcf import export_mjcf
+from jax3dc.export.urdf import export_urdf
+from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.predict.pipeline import predict
+from jax3dc.predict.segmentation import camera_from_dict
+from jax3dc.release import default_structure_model
+from jax3dc.structure import canonicalize, save_boxes, to_json
 from train import cli as train_cli
 
 
@@ -62,16 +76,6 @@ def _command(register: Callable[[argparse._SubParsersAction], None], argv: list[
 
 
 def _stage_export(out: Path, seed: int) -> dict:
-    import mujoco
-
-    from data_pipeline.factories import generate_object
-    from jax3dc.export.blender import export_blender
-    from jax3dc.export.gltf import export_gltf
-    from jax3dc.export.mjcf import export_mjcf
-    from jax3dc.export.urdf import export_urdf
-    from jax3dc.geometry.parts import part_boxes, save_parts
-    from jax3dc.structure import canonicalize, save_boxes, to_json
-
     obj = generate_object("cabinet", seed)
     structure = canonicalize(obj.structure, part_boxes(obj.parts))
     out.mkdir(parents=True, exist_ok=True)
@@ -92,12 +96,6 @@ def _stage_export(out: Path, seed: int) -> dict:
 
 def _predict_one(record, out: Path) -> dict:
     """Predict one held-out test image with its own part meshes as stage 1 and the shipped model."""
-    from data_pipeline.factories import generate_object
-    from jax3dc.predict.pipeline import predict
-    from jax3dc.predict.segmentation import camera_from_dict
-    from jax3dc.geometry.parts import save_parts
-    from jax3dc.release import default_structure_model
-
     obj = generate_object(record.meta["category"], int(record.meta["seed"]))
     out.mkdir(parents=True, exist_ok=True)
     (out / "input.png").write_bytes(record.image_png)
@@ -115,9 +113,6 @@ def _predict_one(record, out: Path) -> dict:
 
 
 def _stage_predict(data: Path, out: Path, count: int) -> dict:
-    from data_pipeline.shards import shard_paths
-    from eval.records import read_records
-
     records = itertools.islice(read_records(shard_paths([data], "test"), "test"), count)
     results = [_predict_one(record, out / f"object_{k}") for k, record in enumerate(records)]
     if not results:
