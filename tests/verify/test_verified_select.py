@@ -57,8 +57,8 @@ def test_fewer_flagged_joints_win_when_none_passes(checked_records):
 
 def test_likelihood_breaks_ties_and_identical_structures_are_checked_once(box, monkeypatch):
     calls = []
-    real = verdicts.check_object_with_curves
-    monkeypatch.setattr(verdicts, "check_object_with_curves", lambda *a, **k: calls.append(1) or real(*a, **k))
+    real = verdicts.verdict_with_curves
+    monkeypatch.setattr(verdicts, "verdict_with_curves", lambda *a, **k: calls.append(1) or real(*a, **k))
     same = to_json(box.target)
     fenced = f"```json\n{same}\n```"  # the same structure as a model may wrap it
     choice = run(box, [Candidate(same, -6.0), Candidate(fenced, -2.0), Candidate(same, -4.0)])
