@@ -51,8 +51,8 @@ def run_eval(args: argparse.Namespace) -> int:
 
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
     from data_pipeline.shards import shard_paths
-    from eval.records import generate_predictions, read_records, reference_of
-    from jax3dc.sampler import DecodeOptions, Sampler
+    from eval.records import read_records, reference_of
+    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
     from eval.metrics.cases import build_cases, load_predictions
     from eval.metrics.tables import format_tables
     from eval.report import write_report
@@ -127,9 +127,8 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     """The code task: programs from the checkpoint (or --predictions, or the records' own), scored."""
     from tqdm import tqdm
 
-    from eval.records import generate_predictions
 
-    from jax3dc.sampler import DecodeOptions, Sampler
+    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
     from eval.metrics.cases import load_predictions
     from eval.metrics.programs import score_program, summarise
 

@@ -19,10 +19,10 @@ from typing import Any
 from tqdm import tqdm
 
 from data_pipeline.record import Record
-from eval.records import read_predictions_file
 from eval.run_verify_pool import Job, Verified, verify_many
-from jax3dc.verify.select import Candidate
+from jax3dc.sampler import read_predictions_file
 from jax3dc.structure import to_json
+from jax3dc.verify.select import Candidate
 
 
 @dataclass
