@@ -107,7 +107,7 @@ def write_blank_images(source: Path, out: Path) -> None:
     """``source``'s test records with I black (same size), everything else kept, in one shard."""
     import numpy as np
 
-    from data_pipeline.render import png_array, png_bytes
+    from jax3dc.render import png_array, png_bytes
     from data_pipeline.shards import read_dataset, write_dataset
 
     if (out / "manifest.json").exists():
@@ -124,7 +124,7 @@ def example_sheet(mujoco: Path, cycles: Path, n: int, path: Path, side: int = 16
     import numpy as np
     from PIL import Image
 
-    from data_pipeline.render import png_array
+    from jax3dc.render import png_array
     from data_pipeline.shards import read_dataset
 
     shifted = {r.key: r for r in read_dataset(cycles)}

@@ -10,7 +10,7 @@ untimed first (imports and first calls). Per object and command it prints the
 best of ``--repeats`` seconds uncached and cached and their ratio (uncached / cached):
   export mjcf      ``jax3dc export --format mjcf`` (one decomposition either way)
   export 3         ``jax3dc export`` to urdf, usd and mjcf in turn, in one process
-  predict          ``eval.predict.predict`` from a parts folder, the object's own structure standing
+  predict          ``jax3dc.predict.predict`` from a parts folder, the object's own structure standing
                    in for the structure model: exports, physics check, report
 The last lines sum each command over the objects. Copied into a checkout from before the cache
 (0c25652), the script times that code as it was: both columns are then its uncached path.
@@ -35,7 +35,7 @@ from PIL import Image  # noqa: E402
 import jax3dc.geometry.convex_pieces as cp  # noqa: E402
 from data_pipeline.factories import generate_object  # noqa: E402
 from data_pipeline.factories.registry import FACTORIES  # noqa: E402
-from eval.predict import predict  # noqa: E402
+from jax3dc.predict import predict  # noqa: E402
 from jax3dc.cli import main as cli  # noqa: E402
 from jax3dc.geometry.parts import part_boxes, save_parts  # noqa: E402
 from jax3dc.structure import canonicalize, to_json  # noqa: E402

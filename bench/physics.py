@@ -2,7 +2,7 @@
 
 The check is the interpenetration sweep: kinematics + collision per joint state, reduced to the
 deepest contact per body pair (MJX: kinematics, an oriented-box broad phase and MJX's convex narrow
-phase on the pairs it keeps, ``eval.physics.mjx_backend``) — what ``eval.physics`` evaluates for rest, sweep and random joint
+phase on the pairs it keeps, ``jax3dc.physics.mjx_backend``) — what ``jax3dc.physics`` evaluates for rest, sweep and random joint
 combinations. Objects come from the procedural factories (convex pieces from
 ``jax3dc.geometry.convex_pieces``); states are uniform in the joint ranges. Printed per object
 structure: MJX compile time and states/s; C states/s on one process (the per-state loop), on one
@@ -40,9 +40,9 @@ def main() -> None:
     import jax.numpy as jnp
 
     from data_pipeline.factories import generate_object
-    from eval.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
-    from eval.physics.sim_model import SimOptions, build_sim_model
-    from eval.physics.tolerances import PENETRATION_TOL_NU
+    from jax3dc.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
+    from jax3dc.physics.sim_model import SimOptions, build_sim_model
+    from jax3dc.physics.tolerances import PENETRATION_TOL_NU
 
     threads = os.cpu_count() or 1
     print(f"devices: {jax.devices()} | CPU processes for C: {threads}", flush=True)
@@ -79,7 +79,7 @@ def main() -> None:
                  f"(pool start {start_s:.1f} s) | C rollout {threads} threads {roll_rate:,.0f} states/s "
                  f"(verdicts agree with the loop on {roll_agree:.4f})")
         if not args.skip_mjx:
-            from eval.physics.mjx_backend import compile_pair_distances
+            from jax3dc.physics.mjx_backend import compile_pair_distances
             t0 = time.perf_counter()
             fn = compile_pair_distances(m)
             q = jnp.asarray(qpos, dtype=jnp.float32)

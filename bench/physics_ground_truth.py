@@ -4,7 +4,7 @@ Ground truth is every factory category x ``--seeds`` seeds plus the PartNet-Mobi
 Printed: the false-alarm rate over joints (target <= 2%) with the reasons of the flagged joints,
 the ground-truth objects whose whole verdict fails (a joint, rest interpenetration or the gravity
 test; factory categories mounted in use are checked as mounted), and per mutation kind
-(``eval.physics.mutations``) how many motion-changing mutations are flagged and flagged with an
+(``eval.verdict_accuracy.mutations``) how many motion-changing mutations are flagged and flagged with an
 expected reason (target >= 95% overall), and how many were skipped because the mutated joint sweeps
 the same poses as the original. ``--details FILE`` writes one JSON line per flagged ground-truth
 joint, failed ground-truth object and missed mutation, to find which check misses. ``--verdicts FILE``
@@ -39,7 +39,7 @@ DEFAULT_FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" /
 def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str], list[str], str]:
     """One object's false alarms and mutation counts, its flagged joints (printed), detail lines and
     verdict line."""
-    from eval.physics.ground_truth import false_alarms, mutation_detection
+    from eval.verdict_accuracy.ground_truth import false_alarms, mutation_detection
 
     warnings.filterwarnings("ignore")
     flagged: list[str] = []
@@ -92,7 +92,7 @@ def main() -> None:
     from tqdm import tqdm
 
     from data_pipeline.factories import FACTORIES
-    from eval.physics.ground_truth import factory_objects, imported_objects
+    from eval.verdict_accuracy.ground_truth import factory_objects, imported_objects
 
     categories = [c for c in args.categories.split(",") if c] or sorted(FACTORIES)
     fixtures = sorted(d for d in Path(args.fixtures).iterdir() if d.is_dir()) if args.fixtures and Path(args.fixtures).is_dir() else []

@@ -1,6 +1,6 @@
 """Rollout throughput of the dynamic checks: MJX (vmapped ``mjx.step``) against C MuJoCo's threaded rollouts.
 
-Limit reachability and the gravity test (``eval.physics.dynamics``) hold servo targets for
+Limit reachability and the gravity test (``jax3dc.physics.dynamics``) hold servo targets for
 ``SETTLE_STEPS`` steps from rest and read where the joints (and the free root) end. Per object
 this bench builds both models exactly as the checks do (reachability: frictionless, contact only
 between the part pairs that the kinematic sweeps bring together; gravity: free root on a floor,
@@ -39,13 +39,13 @@ def main() -> None:
     import jax
 
     from data_pipeline.factories import generate_object
-    from eval.physics import cpu_backend
-    from eval.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
-    from eval.physics.mjx_dynamics import mjx_final_qpos
-    from eval.physics.sim_model import SimOptions, build_sim_model
-    from eval.physics.states import check_states
-    from eval.physics.tolerances import (DETACH_TOL_NU, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU, PENETRATION_TOL_NU,
-                                         RECONTACT_DEPTH_NU)
+    from jax3dc.physics import cpu_backend
+    from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
+    from jax3dc.physics.mjx_dynamics import mjx_final_qpos
+    from jax3dc.physics.sim_model import SimOptions, build_sim_model
+    from jax3dc.physics.states import check_states
+    from jax3dc.physics.tolerances import (DETACH_TOL_NU, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU, PENETRATION_TOL_NU,
+                                           RECONTACT_DEPTH_NU)
 
     threads = os.cpu_count() or 1
     print(f"devices: {jax.devices()} | C rollout threads: {threads} | {SETTLE_STEPS} steps per rollout", flush=True)

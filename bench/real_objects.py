@@ -31,10 +31,10 @@ import numpy as np
 
 from data_pipeline.record import Record
 from data_pipeline.shards import shard_paths, write_dataset
-from eval.generation import read_records
 from eval.metrics.cases import Case, Reference, build_cases, load_predictions, load_references
 from eval.metrics.joints import AXIS_TOLERANCE
-from eval.metrics.score import TABLE1_KEYS, TABLE2_KEYS, evaluate
+from eval.metrics.score import evaluate
+from eval.records import read_records
 from jax3dc.cli import main as jax3dc
 from jax3dc.structure import Box
 

@@ -1,10 +1,10 @@
 """What verified decoding costs on a CPU: seconds per physics verdict (``check_object``, C MuJoCo),
 with and without the dynamics (limit reachability and gravity rollouts), on procedural records.
 
-Each record's parts are rebuilt as ``eval.verified`` does (``record_parts``), its target structure
+Each record's parts are rebuilt as ``jax3dc.verify`` does (``record_parts``), its target structure
 is checked once untimed (imports, first-call set-up) and then timed with and without the dynamics.
 Best of K costs about K distinct verdicts per object (identical candidates are checked once);
-a repair about one verdict per alternative tried (``eval.verified.repair``).
+a repair about one verdict per alternative tried (``jax3dc.verify.repair``).
 
 python3 bench/verified_cost.py --data SHARDS --records 8    (e.g. the test shards `jax3dc demo` builds)
 """
@@ -31,8 +31,8 @@ def main() -> None:
 
     from data_pipeline.shards import read_shard, shard_paths
     from data_pipeline.record_parts import record_parts
-    from eval.verified.select import parse_candidate
-    from eval.verified.verdicts import Physics
+    from jax3dc.verify.select import parse_candidate
+    from jax3dc.verify.verdicts import Physics
     from jax3dc.structure import boxes_from_dict
 
     records = []
@@ -60,7 +60,7 @@ def main() -> None:
             rows[name].append(timed[name])
         print(f"{record.key:45s} parts {len(parts):3d} joints {len(structure.joints()):2d} "
               f"verdict {timed['with dynamics']:.2f} s ({timed['without']:.2f} s without dynamics), "
-              f"ok {verdict['ok']}", flush=True)
+              f"ok {verdict.ok}", flush=True)
     print(f"\n{len(records)} records, seconds per call (mean / median / max):")
     for name, values in rows.items():
         label = "rebuild parts" if name == "parts" else f"verdict {name}"

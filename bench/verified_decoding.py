@@ -34,14 +34,15 @@ apply_gpu_defaults(GENERATION_GPU_FLAGS)
 from data_pipeline.record import Record  # noqa: E402
 from data_pipeline.shards import shard_paths  # noqa: E402
 from eval.baselines import heuristic  # noqa: E402
-from eval.generation import DecodeOptions, Generator, generate_predictions, read_records, reference_of  # noqa: E402
+from eval.records import read_records, reference_of  # noqa: E402
+from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions  # noqa: E402
 from eval.metrics.cases import build_cases  # noqa: E402
 from eval.metrics.score import evaluate  # noqa: E402
 from eval.metrics.tables import format_tables  # noqa: E402
 from data_pipeline.record_parts import record_parts  # noqa: E402
-from eval.verified.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, repair  # noqa: E402
-from eval.verified.select import Candidate, Row, _rank, choose, parse_candidate  # noqa: E402
-from eval.verified.stage import candidates_of  # noqa: E402
+from jax3dc.verify.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, repair  # noqa: E402
+from jax3dc.verify.select import Candidate, Row, _rank, choose, parse_candidate  # noqa: E402
+from eval.run_verify import candidates_of  # noqa: E402
 from jax3dc.structure import boxes_from_dict, to_json  # noqa: E402
 
 
@@ -112,7 +113,7 @@ def _resumed(path: Path, records: list[Record], make, jobs_of, workers: int, lab
     return done, sum(done[r.key]["seconds"] for r in todo) / len(todo)
 
 
-def _tokens_per_s(generator: Generator, records: list[Record], batch: int, max_new: int, constrained: bool) -> float:
+def _tokens_per_s(generator: Sampler, records: list[Record], batch: int, max_new: int, constrained: bool) -> float:
     prompts = sorted((generator.prompt(r) for r in records[:batch]), key=lambda p: -len(p.input_ids))
     options = DecodeOptions(constrained=constrained)
     generator.generate_batch(prompts, batch, max_new, 64, options)  # compile
@@ -148,7 +149,7 @@ def main() -> None:
     split = None if a.split == "all" else a.split
     records = list(read_records(shard_paths(a.data, split), split))[: a.limit or None]
     refs = [reference_of(r) for r in records]
-    generator = Generator.load(a.model or default_structure_model(), dtype=a.dtype)
+    generator = Sampler.load(a.model or default_structure_model(), dtype=a.dtype)
     sources = {q.name: q for folder in a.sources for q in Path(folder).iterdir() if q.is_dir()}
     summary: dict[str, Any] = {"objects": len(records), "ks": a.ks, "batch": a.batch, "workers": a.workers}
 

@@ -23,7 +23,7 @@ from typing import Callable
 from tqdm import tqdm
 
 from data_pipeline.augment import merge_parts, split_part
-from data_pipeline.samples import SourceObject, derived_rng, object_records, split_of
+from data_pipeline.samples import SourceObject, derived_rng, factory_source, object_records, split_of
 from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
 from jax3dc.errors import InputFileError, SetupError
 
@@ -106,13 +106,7 @@ def plan_shards(sources: list[SourceSpec], objects_per_shard: int, split: str = 
 
 def load_source(spec: SourceSpec) -> SourceObject:
     if spec.kind == "factory":
-        from data_pipeline.factories import generate_object
-        from data_pipeline.factories.registry import SCHEMAS
-        from jax3dc.parameters import format_parameters
-
-        g = generate_object(spec.category, spec.seed)
-        return SourceObject(g.category, g.object_id, g.structure, g.parts, g.scale_m_per_nu, g.program_text,
-                            parameters=format_parameters(g.parameters, SCHEMAS[g.category]))
+        return factory_source(spec.category, spec.seed)
     from data_pipeline.importers.source import import_object
 
     obj = import_object(Path(spec.path))
@@ -132,7 +126,7 @@ def load_sources(spec: SourceSpec) -> list[SourceObject]:
 def config_doc(config: BuildConfig) -> dict:
     """The config as a manifest records it: ``appearance`` only when it is not "plain", so a plain
     build writes (and resumes) the manifest of builds made before the option existed."""
-    from data_pipeline.render import APPEARANCES
+    from jax3dc.render import APPEARANCES
 
     if config.appearance not in APPEARANCES:
         raise ValueError(f"appearance must be one of {', '.join(APPEARANCES)}, not {config.appearance!r}")

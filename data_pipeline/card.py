@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from data_pipeline.render import png_array
+from jax3dc.render import png_array
 from data_pipeline.shards import load_manifest, read_dataset
 from jax3dc.errors import InputFileError
 

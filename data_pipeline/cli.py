@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 
-from jax3dc.cli import command_group
+from jax3dc.cli_args import command_group
 
 SUBCOMMAND_MODULES: tuple[str, ...] = (
     "data_pipeline.convert_cli",

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from data_pipeline.importers.frames import FRONTS
 from data_pipeline.importers.limits import DEFAULT_MAX_BODIES, DEFAULT_MAX_FACES, ImportLimits
-from jax3dc.cli import positive_int
+from jax3dc.cli_args import positive_int
 
 DESCRIPTION = """\
 Convert one articulated object into the project's format.

@@ -234,7 +234,7 @@ def restyle_records(records: list[Record], settings: CyclesSettings = CyclesSett
     and build seed only, so restyling the same records twice gives the same looks."""
     if not records:
         return [], []
-    from data_pipeline.render import png_array, png_bytes
+    from jax3dc.render import png_array, png_bytes
 
     with tempfile.TemporaryDirectory(prefix="jax3dc_cycles_") as tmp:
         views, looks = [], []
@@ -284,7 +284,7 @@ def restyle_records(records: list[Record], settings: CyclesSettings = CyclesSett
 
 
 def _record_size(record: Record) -> int:
-    from data_pipeline.render import png_array
+    from jax3dc.render import png_array
 
     return int(record.meta.get("size") or png_array(record.seg_png).shape[0])
 

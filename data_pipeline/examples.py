@@ -26,11 +26,10 @@ from jax3dc.processing.chat import encode_chat
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images
 from jax3dc.processing.tokenizer import Tokenizer
 from jax3dc.errors import StructureError
-from jax3dc.prompt import chat_messages, code_messages, legend_boxes, parameters_messages
+from jax3dc.prompt import IMAGES_PER_TASK, chat_messages, code_messages, legend_boxes, parameters_messages
 from jax3dc.structure.box_frame import PivotFrame, target_in_frame
 
 TASKS = ("structure", "code", "parameters")
-IMAGES_PER_TASK = {"structure": 2, "code": 1, "parameters": 1}  # I and S; I alone; I alone
 
 
 class UnusableRecord(Jax3dcError):

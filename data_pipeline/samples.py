@@ -14,12 +14,15 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
+from data_pipeline.factories import generate_object
+from data_pipeline.factories.registry import SCHEMAS
 from data_pipeline.record import Record
-from data_pipeline.render import (APPEARANCES, PartRenderer, paint_segmentation, part_rgba, png_bytes, sample_appearance,
-                                  sample_camera, sample_lighting, sample_view_lighting, vary_camera)
 from data_pipeline.views import sample_view_pose
+from jax3dc.render import (APPEARANCES, PartRenderer, paint_segmentation, part_rgba, png_bytes, sample_appearance,
+                           sample_camera, sample_lighting, sample_view_lighting, vary_camera)
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.palette import object_palette
+from jax3dc.parameters import format_parameters
 from jax3dc.prompt import build_prompt
 from jax3dc.relations import with_extracted_relations
 from jax3dc.structure import Structure, boxes_to_dict, canonicalize, to_json
@@ -46,6 +49,13 @@ def split_of(object_id: str) -> str:
     """train / val / test from SHA-256 of the object id: every view of an object lands together."""
     u = int.from_bytes(hashlib.sha256(object_id.encode("utf-8")).digest()[:8], "big") / 2.0**64
     return next(name for name, upper in SPLITS if u < upper)
+
+
+def factory_source(category: str, seed: int) -> SourceObject:
+    """Factory object ``category`` of ``seed`` as a source (data builds and scenes both take them)."""
+    g = generate_object(category, seed)
+    return SourceObject(g.category, g.object_id, g.structure, g.parts, g.scale_m_per_nu, g.program_text,
+                        parameters=format_parameters(g.parameters, SCHEMAS[g.category]))
 
 
 def derived_rng(*keys: object) -> np.random.Generator:

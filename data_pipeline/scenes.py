@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 import trimesh
 
-from data_pipeline.samples import SourceObject, derived_rng
+from data_pipeline.samples import SourceObject, derived_rng, factory_source
 from jax3dc.structure import Node, Relation, Structure
 
 FURNITURE = ("table", "desk", "cabinet", "nightstand", "cell_shelf", "simple_bookcase", "drawer_chest")
@@ -106,14 +106,11 @@ def object_level(structure: Structure, parts: dict[int, trimesh.Trimesh], object
 
 def make_scene(seed: int, index: int) -> list[SourceObject]:
     """Scene ``index`` of a build with ``seed`` at part and object granularity."""
-    from data_pipeline.build import SourceSpec, load_source  # local: build imports this module
-    from data_pipeline.factories import object_id
-
     rng = derived_rng(seed, "scene", index)
 
     def factory(category: str) -> SourceObject:
         obj_seed = int(rng.integers(1 << 31))
-        return load_source(SourceSpec("factory", object_id(category, obj_seed), category=category, seed=obj_seed))
+        return factory_source(category, obj_seed)
 
     furniture_cats = rng.choice(FURNITURE, size=int(rng.integers(1, 3)), replace=False)
     item = factory(str(rng.choice(ITEMS)))

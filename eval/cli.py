@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from eval.limits import MAX_SCORED_PARTS
-from jax3dc.cli import command_group, positive_int
+from jax3dc.cli_args import command_group, positive_int
 from jax3dc.errors import InputFileError
 
 SUBCOMMAND_MODULES: tuple[str, ...] = ("eval.run",)

@@ -18,13 +18,33 @@ summary.json lists every stage.
 
 from __future__ import annotations
 
+import argparse
 import itertools
 import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
+import mujoco
+
+from data_pipeline import tokenizer_cli
+from data_pipeline.build import BuildConfig, factory_sources, run_build
+from data_pipeline.factories import generate_object
+from data_pipeline.shards import shard_paths
+from eval import cli as eval_cli
+from eval.records import read_records
 from jax3dc.errors import Jax3dcError
+from jax3dc.export.blender import export_blender
+from jax3dc.export.gltf import export_gltf
+from jax3dc.export.mjcf import export_mjcf
+from jax3dc.export.urdf import export_urdf
+from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.predict.pipeline import predict
+from jax3dc.predict.segmentation import camera_from_dict
+from jax3dc.release import default_structure_model
+from jax3dc.structure import canonicalize, save_boxes, to_json
+from train import cli as train_cli
 
 
 @dataclass(frozen=True)
@@ -44,25 +64,18 @@ PAPER = {"parse": 99.0, "parent_acc": 85.6, "edge_f1": 85.4, "presence_f1": 90.8
 TRAIN_IMAGE = 32  # the tiny preset's 4-pixel patches: 64 per image, 16 tokens
 
 
-def _cli(argv: list[str]) -> None:
-    from jax3dc.cli import main
-
-    code = main(argv)
-    if code != 0:
+def _command(register: Callable[[argparse._SubParsersAction], None], argv: list[str]) -> None:
+    """Runs one command's function with the arguments its own parser makes of ``argv`` (its
+    defaults and checks), not through ``jax3dc.cli``: the demo is one of that CLI's commands."""
+    parser = argparse.ArgumentParser(prog="jax3dc")
+    register(parser.add_subparsers())
+    args = parser.parse_args(argv)
+    code = args.func(args)
+    if code:
         raise Jax3dcError(f"demo stage `jax3dc {' '.join(argv[:2])}` failed with exit code {code}")
 
 
 def _stage_export(out: Path, seed: int) -> dict:
-    import mujoco
-
-    from data_pipeline.factories import generate_object
-    from jax3dc.export.blender import export_blender
-    from jax3dc.export.gltf import export_gltf
-    from jax3dc.export.mjcf import export_mjcf
-    from jax3dc.export.urdf import export_urdf
-    from jax3dc.geometry.parts import part_boxes, save_parts
-    from jax3dc.structure import canonicalize, save_boxes, to_json
-
     obj = generate_object("cabinet", seed)
     structure = canonicalize(obj.structure, part_boxes(obj.parts))
     out.mkdir(parents=True, exist_ok=True)
@@ -83,12 +96,6 @@ def _stage_export(out: Path, seed: int) -> dict:
 
 def _predict_one(record, out: Path) -> dict:
     """Predict one held-out test image with its own part meshes as stage 1 and the shipped model."""
-    from data_pipeline.factories import generate_object
-    from eval.predict.pipeline import predict
-    from eval.predict.segmentation import camera_from_dict
-    from jax3dc.geometry.parts import save_parts
-    from jax3dc.release import default_structure_model
-
     obj = generate_object(record.meta["category"], int(record.meta["seed"]))
     out.mkdir(parents=True, exist_ok=True)
     (out / "input.png").write_bytes(record.image_png)
@@ -106,9 +113,6 @@ def _predict_one(record, out: Path) -> dict:
 
 
 def _stage_predict(data: Path, out: Path, count: int) -> dict:
-    from data_pipeline.shards import shard_paths
-    from eval.generation import read_records
-
     records = itertools.islice(read_records(shard_paths([data], "test"), "test"), count)
     results = [_predict_one(record, out / f"object_{k}") for k, record in enumerate(records)]
     if not results:
@@ -121,8 +125,8 @@ def _stage_train(data: Path, out: Path, minutes: float) -> dict:
     """The tiny preset from scratch on the CPU: shows the training path, teaches little."""
     train, tokenizer = out / "train", out / "tokenizer"
     # A 1k byte-level BPE of the shards: the tiny model's LM head shrinks from 151,680 rows to 1,024.
-    _cli(["data", "tokenizer", "--data", str(data), "--vocab-size", "1024", "--out", str(tokenizer), "--quiet"])
-    _cli(["train", "--init", "tiny", "--output-dir", str(train), "--steps", "400",
+    _command(tokenizer_cli.register, ["tokenizer", "--data", str(data), "--vocab-size", "1024", "--out", str(tokenizer), "--quiet"])
+    _command(train_cli.register, ["train", "--init", "tiny", "--output-dir", str(train), "--steps", "400",
           *[x for o in (f"data={data}", f"tokenizer={tokenizer}", f"image_size={TRAIN_IMAGE}", "seq_len=2048",
                         "batch_size=4", "grad_accum=1", "pack=1", "lr=3e-3", "warmup_steps=5",
                         f"time_limit_min={minutes}", "freeze=", "compute_dtype=float32", "remat=none", "log_every=5",
@@ -160,13 +164,13 @@ def run_demo(out: Path, size: str = "default", seed: int = 0, train_minutes: flo
 
     t = time.perf_counter()
     data = out / "data"
-    _cli(["data", "build", "--out", str(data), "--objects", str(spec.objects), "--views", "1", "--size", str(IMAGE),
-          "--seed", str(seed), "--appearance", "varied", "--workers", "2", "--quiet"])
+    config = BuildConfig(views=1, seed=seed, size=IMAGE, objects_per_shard=8, appearance="varied")
+    run_build(data, factory_sources(spec.objects, seed), config, workers=2, progress=False)
     record("data", t, "done", out=str(data))
 
     t = time.perf_counter()
     reference = out / "reference"
-    _cli(["eval", "run", "--data", str(data), "--out", str(reference), "--reference-as-prediction",
+    _command(eval_cli.register, ["eval", "run", "--data", str(data), "--out", str(reference), "--reference-as-prediction",
           "--split", "train", "--overlays", "4"])
     ref_metrics = json.loads((reference / "metrics.json").read_text())
     record("reference", t, "done", out=str(reference), objects=ref_metrics["counts"]["objects"],
@@ -177,7 +181,7 @@ def run_demo(out: Path, size: str = "default", seed: int = 0, train_minutes: flo
 
     t = time.perf_counter()
     evaluation = out / "evaluate"
-    _cli(["eval", "run", "--data", str(data), "--split", "test", "--limit", str(spec.eval_records),
+    _command(eval_cli.register, ["eval", "run", "--data", str(data), "--split", "test", "--limit", str(spec.eval_records),
           "--batch-size", "8", "--max-new-tokens", "1024", "--dtype", "float32", "--out", str(evaluation),
           "--overlays", "4"])
     m = json.loads((evaluation / "metrics.json").read_text())
@@ -186,7 +190,7 @@ def run_demo(out: Path, size: str = "default", seed: int = 0, train_minutes: flo
 
     t = time.perf_counter()
     baselines = out / "baselines"
-    _cli(["eval", "baselines", "--ref", str(evaluation / "references.jsonl"), "--out", str(baselines)])
+    _command(eval_cli.register, ["eval", "baselines", "--ref", str(evaluation / "references.jsonl"), "--out", str(baselines)])
     rows = {"shipped": m}
     for name in ("heuristic", "star"):
         rows[name] = json.loads((baselines / name / "metrics.json").read_text())

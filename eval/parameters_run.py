@@ -32,7 +32,7 @@ def run_parameters_task(args: argparse.Namespace, records: list, out: Path) -> i
     from tqdm import tqdm
 
     from data_pipeline.factories.registry import SCHEMAS, run_parameters
-    from eval.generation import DecodeOptions, Generator, generate_predictions
+    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
     from eval.metrics.cases import load_predictions
     from eval.metrics.parameters import score_parameters, summarise
 
@@ -47,10 +47,11 @@ def run_parameters_task(args: argparse.Namespace, records: list, out: Path) -> i
     elif args.reference_as_prediction:
         texts, name = {r.key: r.parameters for r in records}, "reference"
     else:
-        generator = Generator.load(args.checkpoint, dtype=args.dtype)
+        generator = Sampler.load(args.checkpoint, dtype=args.dtype)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
                                             args.max_new_tokens, args.bucket,
-                                            DecodeOptions(constrained=not args.unconstrained), "parameters")
+                                            DecodeOptions(constrained=not args.unconstrained, schemas=SCHEMAS),
+                                            "parameters")
         print(("unconstrained" if args.unconstrained else "parameter grammar") + " decoding; " + stats.summary())
         texts, name = {key: line["text"] for key, line in lines.items()}, Path(args.checkpoint).name
     scores = [score_parameters(r.key, r.parameters, texts.get(r.key, ""), SCHEMAS, run_parameters)

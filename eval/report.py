@@ -8,15 +8,14 @@ index.html with a thumbnail, the metrics and a 3D viewer link per object (``eval
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from eval.cli import write_evaluation
 from eval.metrics.score import Case, Evaluation, evaluate
 from eval.metrics.tables import TABLE1_FAILURES_RELATIONS, TABLE1_STRUCTURE_JOINT, TABLE2, Column
-from eval.overlay import draw_overlay
-from eval.viewers import VIEWERS_DIR, index_html, write_viewers
+from jax3dc.overlay import draw_overlay
+from eval.viewers import VIEWERS_DIR, index_html, overlay_name, write_viewers
 from jax3dc.errors import InputFileError
 
 FAILURE_BARS: tuple[tuple[str, str], ...] = (
@@ -84,11 +83,6 @@ def failure_chart(metrics: Mapping[str, Any], path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
-
-
-def overlay_name(key: str) -> str:
-    """File name for a record key (keys hold '/')."""
-    return re.sub(r"[^A-Za-z0-9._-]+", "_", key) + ".png"
 
 
 def write_overlays(cases: Sequence[Case], records: Mapping[str, Any], refs: Mapping[str, Any], folder: Path,

@@ -11,7 +11,7 @@ of the record's own program (programs.jsonl per object, metrics.json, tables.md)
 ``--task parameters`` scores the stage-1 parameter backend (eval.parameters_run).
 
 Generation is grammar-constrained unless ``--unconstrained``. With ``--candidates K`` > 1 or
-``--repair``, a verification stage follows (``eval.verified.stage``): the physics verdict picks
+``--repair``, a verification stage follows (``eval.run_verify``): the physics verdict picks
 among the K candidates and repairs the winner's flagged joints; verified.jsonl says which won,
 why, and what was repaired, and its structures are the ones scored.
 """
@@ -23,7 +23,7 @@ import json
 import os
 from pathlib import Path
 
-from jax3dc.cli import positive_int, positive_float
+from jax3dc.cli_args import positive_int, positive_float
 from jax3dc.errors import InputFileError, Jax3dcError
 
 ALL_SPLITS = "all"  # --split value that reads every shard and keeps every record
@@ -52,7 +52,8 @@ def run_eval(args: argparse.Namespace) -> int:
 
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
     from data_pipeline.shards import shard_paths
-    from eval.generation import DecodeOptions, Generator, generate_predictions, read_records, reference_of
+    from eval.records import read_records, reference_of
+    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
     from eval.metrics.cases import build_cases, load_predictions
     from eval.metrics.tables import format_tables
     from eval.report import write_report
@@ -95,7 +96,7 @@ def run_eval(args: argparse.Namespace) -> int:
     elif args.reference_as_prediction:
         preds, name = {r.key: r.target for r in records}, "reference"
     else:
-        generator = Generator.load(args.checkpoint, dtype=args.dtype)
+        generator = Sampler.load(args.checkpoint, dtype=args.dtype)
         options = DecodeOptions(constrained=not args.unconstrained, candidates=args.candidates,
                                 temperature=args.temperature, top_p=args.top_p, seed=args.seed)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
@@ -106,7 +107,7 @@ def run_eval(args: argparse.Namespace) -> int:
         preds = {key: line["text"] for key, line in lines.items()}
         name = Path(args.checkpoint).name
         if args.candidates > 1 or args.repair:
-            from eval.verified.stage import verify_predictions
+            from eval.run_verify import verify_predictions
 
             preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair,
                                                  source_folders(args.sources))
@@ -131,7 +132,8 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     """The code task: programs from the checkpoint (or --predictions, or the records' own), scored."""
     from tqdm import tqdm
 
-    from eval.generation import DecodeOptions, Generator, generate_predictions
+
+    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
     from eval.metrics.cases import load_predictions
     from eval.metrics.programs import score_program, summarise
 
@@ -145,7 +147,7 @@ def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     elif args.reference_as_prediction:
         texts, name = {r.key: r.program for r in records}, "reference"
     else:
-        generator = Generator.load(args.checkpoint, dtype=args.dtype)
+        generator = Sampler.load(args.checkpoint, dtype=args.dtype)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
                                             args.max_new_tokens, args.bucket,
                                             DecodeOptions(constrained=not args.unconstrained), "code")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import html
 import io
+import re
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -19,6 +20,7 @@ from tqdm import tqdm
 
 from eval.metrics.score import Case, Evaluation
 from jax3dc.errors import Jax3dcError
+from jax3dc.physics.findings import Verdict
 
 VIEWERS_DIR = "viewers"
 THUMB_PX = 128
@@ -26,10 +28,13 @@ COLUMNS = (("Parent", "parent_acc", 1), ("Edge F1", "edge_f1", 1), ("Pres. F1", 
 
 
 def page_stem(key: str) -> str:
-    """File stem of a record key (keys hold '/'), as the overlays name theirs."""
-    from eval.report import overlay_name
+    """File stem of a record key (keys hold '/'): its viewer page's, and its overlay's (``overlay_name``)."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", key)
 
-    return overlay_name(key).removesuffix(".png")
+
+def overlay_name(key: str) -> str:
+    """File name of a record's joint overlay."""
+    return page_stem(key) + ".png"
 
 
 def write_thumbnail(image_png: bytes, path: Path) -> None:
@@ -39,9 +44,9 @@ def write_thumbnail(image_png: bytes, path: Path) -> None:
         thumb.save(path)
 
 
-def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], path: Path) -> dict[str, Any]:
+def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], path: Path) -> Verdict:
     """The viewer of one parsed prediction; returns its physics verdict."""
-    from eval.physics.verdict import check_object
+    from jax3dc.physics.verdict import verdict_with_curves
     from data_pipeline.record_parts import record_parts
     from jax3dc.export.gltf import gltf_bytes
     from jax3dc.viewer import ViewerInputs, write_viewer
@@ -50,9 +55,9 @@ def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], pa
         parts, scale, mounted = record_parts(record, sources)
     except KeyError as e:  # a record from before the build wrote what rebuilding needs
         raise Jax3dcError(f"record {case.key}: cannot rebuild its parts: no meta field {e}") from None
-    verdict = check_object(case.prediction, parts, scale, mounted=mounted)
+    verdict = verdict_with_curves(case.prediction, parts, scale, mounted=mounted)[0]
     glb = gltf_bytes(case.prediction, parts, scale)
-    write_viewer(ViewerInputs(glb, case.key, case.key, verdict, record.image_png, record.seg_png), path)
+    write_viewer(ViewerInputs(glb, case.key, case.key, verdict.to_json(), record.image_png, record.seg_png), path)
     return verdict
 
 
@@ -77,8 +82,8 @@ def write_viewers(cases: Sequence[Case], records: Mapping[str, Any], folder: Pat
             continue
         entry.pop("why")
         entry["viewer"] = f"{page_stem(case.key)}.html"
-        flagged = [k for k, j in sorted(verdict["joints"].items(), key=lambda kv: int(kv[0])) if not j["ok"]]
-        entry["physics"] = "PASS" if verdict["ok"] else "FAIL" + (
+        flagged = [str(part) for part in sorted(verdict.failed_joints)]
+        entry["physics"] = "PASS" if verdict.ok else "FAIL" + (
             f" (joints of parts {', '.join(flagged)} flagged)" if flagged else "")
     return done
 

@@ -1,69 +1,34 @@
 """The `jax3dc` command: one parser, subcommands registered by each area of the project.
 
-Each module in COMMAND_MODULES has ``register(subparsers)`` which adds its subcommands and
-sets ``func(args) -> int`` on them. Errors from bad input (Jax3dcError) are caught here once:
-one line on stderr, exit code 1.
+Each command module has ``register(subparsers)`` which adds its subcommands and sets
+``func(args) -> int`` on them. The core's modules are imported here; the packages built on the
+core (data, train, eval, demo) declare theirs as entry points of the group ``jax3dc.commands`` in
+pyproject.toml, found at run time, so the core names none of them. Errors from bad input
+(Jax3dcError) are caught here once: one line on stderr, exit code 1.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import logging
 import sys
 import warnings
+from importlib.metadata import entry_points
 
 from jax3dc.errors import Jax3dcError, shorten
 from jax3dc.gl import configure_gl
 
-# Modules are imported lazily by name so that `jax3dc validate` does not pay for importing jax.
-COMMAND_MODULES: tuple[str, ...] = (
-    "data_pipeline.cli",
-    "jax3dc.program.cli",
-    "jax3dc.structure_cli",
-    "jax3dc.export.cli",
-    "eval.cli",
-    "train.cli",
-    "eval.demo_cli",
-    "eval.physics.cli",
-    "eval.predict.cli",
-    "jax3dc.viewer.cli",
-)
+configure_gl()  # before the command modules: some import mujoco, which reads MUJOCO_GL only then
 
+from jax3dc import structure_cli  # noqa: E402
+from jax3dc.export import cli as export_cli  # noqa: E402
+from jax3dc.physics import cli as physics_cli  # noqa: E402
+from jax3dc.predict import cli as predict_cli  # noqa: E402
+from jax3dc.program import cli as program_cli  # noqa: E402
+from jax3dc.viewer import cli as viewer_cli  # noqa: E402
 
-def command_group(subparsers: argparse._SubParsersAction, name: str, **kwargs) -> argparse._SubParsersAction:
-    """Adds a command that only holds subcommands and returns their subparsers; given alone
-    (``jax3dc NAME``) it prints its help and exits 2."""
-    parser = subparsers.add_parser(name, **kwargs)
-
-    def usage(_args: argparse.Namespace) -> int:
-        parser.print_help()
-        return 2
-
-    parser.set_defaults(func=usage)
-    return parser.add_subparsers(dest=f"{name}_command", metavar="SUBCOMMAND")
-
-
-def positive_int(text: str) -> int:
-    """argparse type of counts that must be at least 1 (batch sizes, workers)."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
-    return value
-
-
-def positive_float(text: str) -> float:
-    """argparse type of rates that must be above 0 (temperature, top-p)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = 0.0
-    if not value > 0 or value != value or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
+CORE_COMMANDS = (program_cli, structure_cli, export_cli, physics_cli, predict_cli, viewer_cli)
+COMMAND_GROUP = "jax3dc.commands"  # entry-point group of the commands of the packages above the core
 
 
 class _Parser(argparse.ArgumentParser):
@@ -92,9 +57,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="One image in, a structured, articulated, simulation-ready 3D object out.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    configure_gl()  # before the command modules: some import mujoco, which reads MUJOCO_GL only then
-    for name in COMMAND_MODULES:
-        importlib.import_module(name).register(sub)
+    for module in CORE_COMMANDS:
+        module.register(sub)
+    for entry in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
+        entry.load()(sub)
     return parser
 
 

@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from jax3dc.constrained import parameters, program, structure
+from jax3dc.constrained import Constraint, parameters, program, structure
 from jax3dc.model.qwen3_vl import KVCache
 from jax3dc.processing.tokenizer import QWEN_VL_SPECIAL_IDS
 
@@ -64,13 +64,6 @@ class Generated(NamedTuple):
     tokens: jax.Array
     lengths: jax.Array
     logprobs: jax.Array
-
-
-class Constraint(NamedTuple):
-    """A grammar on the device: its lifted tables and each row's state (``jax3dc.constrained``)."""
-
-    tables: structure.Tables | program.Tables | parameters.Tables
-    rows: structure.Rows | program.Rows | parameters.Rows
 
 
 class Prefilled(NamedTuple):

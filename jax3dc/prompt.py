@@ -16,6 +16,8 @@ import numpy as np
 from jax3dc.palette import BACKGROUND_RGB, hex_colour, part_colour
 from jax3dc.structure.schema import FAMILIES, JOINT_TYPES, PLANES, Box
 
+IMAGES_PER_TASK = {"structure": 2, "code": 1, "parameters": 1}  # the images a task's prompt holds: I and S; I alone
+
 LEGEND_HEADER = "Parts (id: colour | centroid | extent):"
 _LEGEND_LINE = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \| (\S+) (\S+) (\S+) \| (\S+) (\S+) (\S+)$", re.MULTILINE)
 

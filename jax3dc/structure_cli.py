@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from jax3dc.cli import positive_int
+from jax3dc.cli_args import positive_int
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.structure import MAX_DOCUMENT_BYTES, canonicalize, load_boxes, parse_structure, to_json, validate
 

@@ -37,17 +37,6 @@ def cast_floats(tree: Any, dtype: jnp.dtype) -> Any:
     return jax.tree.map(lambda x: x.astype(dtype) if jnp.issubdtype(x.dtype, jnp.floating) else x, tree)
 
 
-def masked_cross_entropy(logits: jax.Array, labels: jax.Array, mask: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Sum over scored positions of -log p(label) (in float32) and of argmax == label."""
-    logits = logits.astype(jnp.float32)
-    logz = jax.nn.logsumexp(logits, axis=-1)
-    picked = jnp.take_along_axis(logits, labels[..., None], axis=-1)[..., 0]
-    mask = mask.astype(jnp.float32)
-    nll = jnp.sum((logz - picked) * mask)
-    correct = jnp.sum((jnp.argmax(logits, axis=-1) == labels) * mask)
-    return nll, correct
-
-
 def _micro_shardings(batch_sharding: dict[str, NamedSharding]) -> dict[str, NamedSharding]:
     """Each batch array's layout without its leading accumulation axis: one micro-batch's rows
     keep the batch axes the run's rules table gave the whole batch (train/parallel.py)."""

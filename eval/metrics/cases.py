@@ -12,7 +12,6 @@ a malformed *file* (bad JSON line, missing key, invalid reference) is an InputFi
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping
@@ -21,13 +20,9 @@ from eval.limits import MAX_SCORED_PARTS
 from eval.metrics.score import Case
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.structure import Box, Structure, boxes_from_dict, canonicalize, parse_structure
+from jax3dc.structure.reply import json_text
 
 MISSING_RULE = "missing"
-
-# Chat-template end markers a generation may still carry, and a Markdown code fence around JSON.
-_END_MARKERS = re.compile(r"(<\|im_end\|>|<\|endoftext\|>)\s*$")
-_FENCE = re.compile(r"^```(?:json)?\s*\n?(.*?)\n?```$", re.DOTALL)
-
 
 @dataclass(frozen=True)
 class Reference:
@@ -139,13 +134,6 @@ def load_predictions(path: str | Path) -> dict[str, Any]:
             raise InputFileError(path, f'line {number} (key {key!r}): a prediction needs "text" or "structure"')
         preds[key] = doc
     return preds
-
-
-def json_text(raw: str) -> str:
-    """The JSON document in a raw generation: end-of-turn markers and a code fence removed."""
-    text = _END_MARKERS.sub("", raw.strip()).strip()
-    fenced = _FENCE.match(text)
-    return fenced.group(1).strip() if fenced else text
 
 
 def parse_prediction(doc: str | Mapping[str, Any], ref: Reference) -> Structure:

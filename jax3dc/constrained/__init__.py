@@ -16,15 +16,24 @@ stops on a document that parses and validates against its prompt (see ``structur
 from __future__ import annotations
 
 import re
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import numpy as np
 
+from jax3dc.constrained import parameters, program, structure
 from jax3dc.constrained.structure import ID_LIMIT, Rows, Tables, initial_rows, min_tokens, structure_tables
 from jax3dc.errors import StructureError
 
 _LEGEND_ID = re.compile(r"^(\d+): #[0-9a-fA-F]{6} \|", re.MULTILINE)
 _JOINTS = re.compile(r"^Joints: (\d+)\s*$", re.MULTILINE)
+
+
+class Constraint(NamedTuple):
+    """A grammar on the device: its lifted tables and each row's state; defined here, beside the
+    grammars that build it, so that ``jax3dc.generate`` imports this package and not the reverse."""
+
+    tables: structure.Tables | program.Tables | parameters.Tables
+    rows: structure.Rows | program.Rows | parameters.Rows
 
 
 def prompt_counts(prompt: str, where: str = "prompt") -> tuple[int, int]:
@@ -49,13 +58,11 @@ def _room(room: int | Sequence[int] | None, rows: int) -> list[int] | None:
 
 def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], names: Sequence[str] | None = None,
                          room: int | Sequence[int] | None = None):
-    """The structure grammar for these prompts (one row each), as a ``generate.Constraint``;
+    """The structure grammar for these prompts (one row each), as a ``Constraint``;
     ``names`` (e.g. record keys) say which prompt an error is about. ``room`` (one for all rows, or
     one per row): the most new tokens a row may write, stop token included (the smaller of
     max_new_tokens and the model's context minus the prompt); a row whose room cannot hold the
     shortest document for its prompt is an error naming it."""
-    from jax3dc.generate import Constraint
-
     names = list(names) if names is not None else [f"prompt {i}" for i in range(len(prompts))]
     counts = [prompt_counts(p, name) for p, name in zip(prompts, names)]
     for (n, _), name in zip(counts, names):
@@ -76,22 +83,16 @@ def structure_constraint(tokenizer, vocab_size: int, prompts: Sequence[str], nam
 
 
 def program_constraint(tokenizer, vocab_size: int, rows: int, room: int | Sequence[int] | None = None):
-    """The part-program grammar for ``rows`` rows, as a ``generate.Constraint``; ``room`` as for
+    """The part-program grammar for ``rows`` rows, as a ``Constraint``; ``room`` as for
     ``structure_constraint``."""
-    from jax3dc.constrained import program
-    from jax3dc.generate import Constraint
-
     return Constraint(program.program_tables(tokenizer, vocab_size), program.initial_rows(rows, _room(room, rows)))
 
 
 def parameters_constraint(schemas, tokenizer, vocab_size: int, rows: int):
     """The parameter-text grammar of ``schemas`` (category -> Schema) for ``rows`` rows, as a
-    ``generate.Constraint``."""
-    from jax3dc.constrained import parameters
-    from jax3dc.generate import Constraint
-
+    ``Constraint``."""
     return Constraint(parameters.parameters_tables(schemas, tokenizer, vocab_size), parameters.initial_rows(rows))
 
 
-__all__ = ["Rows", "Tables", "min_tokens", "parameters_constraint", "program_constraint", "prompt_counts",
+__all__ = ["Constraint", "Rows", "Tables", "min_tokens", "parameters_constraint", "program_constraint", "prompt_counts",
            "structure_constraint"]

@@ -7,7 +7,7 @@ import json
 import math
 from pathlib import Path
 
-from jax3dc.cli import positive_int
+from jax3dc.cli_args import positive_int
 from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.export.files import check_file_stem
 from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES

@@ -14,7 +14,7 @@ reach the file only as the labels' slugs), metres per nu (``jax3dc_scale``) and
 whether the object is mounted (``jax3dc_mounted``). With them and ``meshes/<id>.obj`` (every
 part's surface, a flat part's too though MuJoCo draws that one as a thin box) ``jax3dc physics
 check object.xml`` checks the file itself: its bodies, joints and collision pieces
-(``eval.physics.exported``).
+(``jax3dc.physics.exported``).
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The simulation MJCF of an object: what ``jax3dc export --format mjcf`` writes and what the
-physics checks (``eval.physics``) run on, from one builder.
+physics checks (``jax3dc.physics``) run on, from one builder.
 
 The object, in metres, with one body per part nested as the structure (frames and names from
 ``assembly``):

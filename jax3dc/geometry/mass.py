@@ -44,12 +44,6 @@ def solid_of(mesh: trimesh.Trimesh, min_thickness: float = 1e-3) -> tuple[trimes
     return box, "box"
 
 
-def mesh_volume(mesh: trimesh.Trimesh) -> float:
-    """Volume of the part's solid (see the module docstring for open or flat meshes)."""
-    solid, _ = solid_of(mesh, min_thickness=1e-9)
-    return float(abs(solid.volume))
-
-
 def mass_properties(mesh: trimesh.Trimesh, density: float, scale: float = 1.0,
                     min_thickness_m: float = 1e-3) -> MassProperties:
     """Mass properties of ``mesh`` scaled by ``scale`` (nu -> metres) at ``density`` (kg/m³)."""

@@ -105,9 +105,6 @@ class ProcessedImages:
     pixel_values: np.ndarray  # [sum(t*h*w), C * temporal_patch_size * patch_size**2] float32
     image_grid_thw: np.ndarray  # [num_images, 3] int64
 
-    def num_tokens(self, merge_size: int) -> list[int]:
-        """Number of ``<|image_pad|>`` tokens each image occupies in the prompt."""
-        return image_token_counts(self.image_grid_thw, merge_size)
 
 
 def image_token_counts(image_grid_thw: np.ndarray | Sequence[Sequence[int]], merge_size: int) -> list[int]:

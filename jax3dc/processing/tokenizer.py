@@ -13,7 +13,7 @@ import json
 import os
 import shutil
 from dataclasses import dataclass
-from typing import Iterable, Sequence
+from typing import Iterable
 
 import tokenizers
 
@@ -106,9 +106,6 @@ class Tokenizer:
 
     def decode(self, ids: Iterable[int], skip_special_tokens: bool = True) -> str:
         return self._backend.decode([int(i) for i in ids], skip_special_tokens=skip_special_tokens)
-
-    def decode_batch(self, rows: Sequence[Sequence[int]], skip_special_tokens: bool = True) -> list[str]:
-        return [self.decode(row, skip_special_tokens) for row in rows]
 
     def save_pretrained(self, checkpoint_dir: str | os.PathLike, chat_template: str | None = None) -> None:
         """Copy the tokenizer files next to a saved model (or write them, for a tokenizer built in

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from jax3dc.cli import command_group, positive_float, positive_int
+from jax3dc.cli_args import command_group, positive_float, positive_int
 from jax3dc.errors import InputFileError
 from jax3dc.program.blender import to_blender_script
 from jax3dc.program.interpreter import DEFAULT_MAX_SECONDS, DEFAULT_MAX_TRIANGLES, Budget, run_program

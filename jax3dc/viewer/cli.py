@@ -6,7 +6,7 @@ import argparse
 import webbrowser
 from pathlib import Path
 
-from jax3dc.cli import positive_float
+from jax3dc.cli_args import positive_float
 
 DESCRIPTION = """\
 Write the interactive 3D viewer of an object (an HTML page) and open it in the web browser.

@@ -23,7 +23,7 @@ def _bytes_if_there(path: Path) -> bytes | None:
 
 
 def read_verdict(path: Path) -> dict | None:
-    """physics.json (``eval.physics`` verdict) if it exists; malformed is an input error."""
+    """physics.json (``jax3dc.physics`` verdict) if it exists; malformed is an input error."""
     raw = _bytes_if_there(path)
     if raw is None:
         return None

@@ -16,7 +16,7 @@ import pytest
 from data_pipeline.build import BuildConfig, factory_sources, run_build
 from data_pipeline.cycles import (BACKGROUNDS, CyclesSettings, background_image, camera_frame, composite, mask_iou,
                                   restyle_dataset, restyle_records, sample_look)
-from data_pipeline.render import png_array
+from jax3dc.render import png_array
 from data_pipeline.samples import derived_rng
 from data_pipeline.shards import read_dataset
 from data_pipeline.record_parts import record_parts

@@ -9,11 +9,12 @@ import trimesh
 
 from data_pipeline.build import BuildConfig, config_doc, factory_sources, run_build
 from data_pipeline.factories import generate_object
-from data_pipeline.render import (FOVY_RANGE, Camera, Lighting, PartRenderer, decode_segmentation, paint_segmentation,
-                                  part_rgba, png_array, png_bytes, sample_appearance, sample_camera, sample_lighting,
-                                  sample_view_lighting, scene_xml)
+from jax3dc.render import (FOVY_RANGE, Camera, Lighting, PartRenderer, paint_segmentation,
+                           part_rgba, png_array, png_bytes, sample_appearance, sample_camera, sample_lighting,
+                           sample_view_lighting, scene_xml)
 from data_pipeline.samples import SourceObject, derived_rng, object_records
 from data_pipeline.shards import load_manifest, read_dataset
+from tests.data.segmentation_ids import decode_segmentation
 from data_pipeline.views import move_joint, sample_view_pose
 from jax3dc.errors import InputFileError
 from jax3dc.palette import BACKGROUND_RGB, object_palette

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from data_pipeline.render import Lighting, PartRenderer, sample_camera
+from jax3dc.render import Lighting, PartRenderer, sample_camera
 from data_pipeline.shards import load_manifest, read_dataset
 from jax3dc.cli import main
 

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import FACTORIES, generate_object
-from data_pipeline.render import decode_segmentation, png_array
+from jax3dc.render import png_array
+from tests.data.segmentation_ids import decode_segmentation
 from data_pipeline.samples import SourceObject, object_records
 from jax3dc.palette import BACKGROUND_RGB, object_palette, part_colour
 from jax3dc.structure import boxes_from_dict, parse_structure

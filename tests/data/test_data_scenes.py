@@ -6,7 +6,8 @@ import json
 import numpy as np
 
 from data_pipeline.build import BuildConfig, run_build, scene_sources
-from data_pipeline.render import decode_segmentation, png_array
+from jax3dc.render import png_array
+from tests.data.segmentation_ids import decode_segmentation
 from data_pipeline.samples import object_records, split_of
 from data_pipeline.scenes import make_scene
 from data_pipeline.shards import read_dataset

@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from eval.metrics.score import Case, evaluate
-from eval.overlay import PREDICTED_RGB, REFERENCE_RGB, camera_matrices, draw_overlay, project
+from jax3dc.overlay import PREDICTED_RGB, REFERENCE_RGB, camera_matrices, draw_overlay, project
 from eval.report import failure_chart, markdown_table, per_category_markdown
 from jax3dc.structure import Box, Joint, Material, Node, Structure
 
@@ -51,7 +51,7 @@ def test_matrix_camera_matches_look_at_and_image_scaling() -> None:
 
 def test_mujoco_free_camera_matches_mujoco_rendering() -> None:
     """Small spheres rendered by MuJoCo's free camera land where `project` puts their centres."""
-    import data_pipeline.render  # noqa: F401  (chooses the GL backend before mujoco is imported)
+    import jax3dc.render  # noqa: F401  (chooses the GL backend before mujoco is imported)
     import mujoco
 
     centres = np.array([[0.0, 0.0, 0.0], [0.3, -0.1, 0.2], [-0.25, 0.2, -0.15], [0.1, 0.3, 0.3]])

@@ -189,19 +189,19 @@ def checkpoint(tmp_path_factory) -> Path:
 @pytest.mark.slow
 def test_generation_garbage_is_parse_failures_and_resumes(shards: Path, checkpoint: Path, tmp_path: Path,
                                                          monkeypatch, capsys) -> None:
-    from eval.generation import Generator
+    from jax3dc.sampler import Sampler
 
     out = tmp_path / "report"
     argv = ["eval", "run", "--checkpoint", str(checkpoint), "--data", str(shards), "--out", str(out),
             "--batch-size", "2", "--max-new-tokens", "5", "--bucket", "256", "--dtype", "float32", "--overlays", "3"]
     batches: list[int] = []
-    real = Generator.generate_batch
+    real = Sampler.generate_batch
 
     def counted(self, prompts, *args):
         batches.append(len(prompts))
         return real(self, prompts, *args)
 
-    monkeypatch.setattr(Generator, "generate_batch", counted)
+    monkeypatch.setattr(Sampler, "generate_batch", counted)
     assert main(argv) == 0
     assert batches == [2, 1]
     assert "generated 3 objects" in capsys.readouterr().out
@@ -235,11 +235,12 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
     import jax
 
     from data_pipeline.shards import shard_paths
-    from eval.generation import DecodeOptions, Generator, read_records
+    from eval.records import read_records
+    from jax3dc.sampler import DecodeOptions, Sampler
     from jax3dc.generate import GenerationConfig, generate
     from jax3dc.processing.processor import preprocess_images
 
-    generator = Generator.load(checkpoint, dtype="float32")
+    generator = Sampler.load(checkpoint, dtype="float32")
     records = list(read_records(shard_paths([shards], "test"), "test"))
     prompts = [generator.prompt(r) for r in records]
     with jax.default_matmul_precision("highest"):
@@ -260,16 +261,16 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
 def test_weights_only_export_falls_back_to_packaged_tokenizer(checkpoint: Path, tmp_path: Path, capsys) -> None:
     import shutil
 
-    from eval.generation import Generator
+    from jax3dc.sampler import Sampler
     from jax3dc.processing.processor import ImageProcessorConfig
 
     for path in checkpoint.iterdir():
         if path.name == "config.json" or path.suffix == ".safetensors" or path.name.endswith(".index.json"):
             shutil.copy(path, tmp_path / path.name)
-    generator = Generator.load(tmp_path, dtype="float32")
+    generator = Sampler.load(tmp_path, dtype="float32")
     assert generator.tokenizer.special.im_end == 151645
     assert generator.processor == ImageProcessorConfig.qwen3_vl()
     err = capsys.readouterr().err
     assert "no tokenizer.json" in err and "no preprocessor_config.json" in err
     with pytest.raises(InputFileError, match="no config.json"):
-        Generator.load(tmp_path / "missing")
+        Sampler.load(tmp_path / "missing")

@@ -10,7 +10,7 @@ import trimesh
 
 import jax3dc.geometry.convex_pieces as cp
 from data_pipeline.factories.registry import generate_object
-from eval.physics.verdict import check_object
+from jax3dc.physics.verdict import check_object
 from jax3dc.export.mjcf import mjcf_model
 from jax3dc.export.simulation import MIN_PIECE_M
 

@@ -21,11 +21,11 @@ from scipy.spatial.transform import Rotation
 
 from data_pipeline.factories.registry import FACTORIES, generate_object
 from data_pipeline.importers.source import import_object
-from eval.physics.cpu_backend import final_qpos
-from eval.physics.dynamics import SETTLE_STEPS
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.tolerances import (DETACH_TOL_NU, GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT, GRAVITY_TILT_RAD,
-                                     LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU)
+from jax3dc.physics.cpu_backend import final_qpos
+from jax3dc.physics.dynamics import SETTLE_STEPS
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.tolerances import (DETACH_TOL_NU, GRAVITY_DRIFT_NU, GRAVITY_JOINT_DRIFT, GRAVITY_TILT_RAD,
+                                       LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU)
 from export_cases import CASES
 from jax3dc.cli import main
 from jax3dc.export.files import write_files

@@ -31,7 +31,7 @@ def config(dataset: Path, out: Path, steps: int, **kw) -> TrainConfig:
 
 @pytest.mark.slow
 def test_train_on_shards_resume_and_export(dataset: Path, tmp_path: Path) -> None:
-    from eval.generation import Generator
+    from jax3dc.sampler import Sampler
     from train.loop import run
 
     whole, losses = [], []
@@ -42,7 +42,7 @@ def test_train_on_shards_resume_and_export(dataset: Path, tmp_path: Path) -> Non
     run(config(dataset, tmp_path / "split", 4), on_step=lambda s, m: losses.append(m["loss"]))
     np.testing.assert_allclose(losses, whole, rtol=1e-5)
 
-    generator = Generator.load(tmp_path / "whole" / "hf", dtype="float32")
+    generator = Sampler.load(tmp_path / "whole" / "hf", dtype="float32")
     rec = record(CATEGORIES[0], 0)
     prompt = generator.prompt(rec)
     encoder = ExampleEncoder(generator.tokenizer, generator.processor, 2)

@@ -19,7 +19,7 @@ from PIL import Image  # noqa: E402
 from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
 from jax3dc.generate import GenerationConfig, generate  # noqa: E402
 from jax3dc.model.params import load_pretrained  # noqa: E402
-from jax3dc.processing.processor import ImageProcessorConfig, preprocess_image  # noqa: E402
+from jax3dc.processing.processor import ImageProcessorConfig, image_token_counts, preprocess_image  # noqa: E402
 
 NEW_TOKENS = 32
 
@@ -74,7 +74,7 @@ def test_greedy_with_image_matches_transformers(checkpoint) -> None:
     processed = preprocess_image(image, ImageProcessorConfig(
         patch_size=vision.patch_size, temporal_patch_size=vision.temporal_patch_size,
         merge_size=vision.spatial_merge_size, min_pixels=16 * 16, max_pixels=32 * 32))
-    (pads,) = processed.num_tokens(vision.spatial_merge_size)
+    (pads,) = image_token_counts(processed.image_grid_thw, vision.spatial_merge_size)
     rng = np.random.default_rng(2)
     ids = np.concatenate([
         rng.integers(0, config.vision_start_token_id, 3), [config.vision_start_token_id],

@@ -15,6 +15,7 @@ from transformers.models.qwen2_vl.image_processing_pil_qwen2_vl import smart_res
 from jax3dc.errors import InputFileError
 from jax3dc.processing.processor import (
     ImageProcessorConfig,
+    image_token_counts,
     load_image,
     preprocess_image,
     preprocess_images,
@@ -69,7 +70,7 @@ def test_max_pixels_budget_matches_hf() -> None:
 def test_448_image_gives_196_tokens() -> None:
     processed = preprocess_image(random_image(448, 448))
     assert processed.image_grid_thw.tolist() == [[1, 28, 28]]
-    assert processed.num_tokens(merge_size=2) == [196]
+    assert image_token_counts(processed.image_grid_thw, 2) == [196]
     assert processed.pixel_values.shape == (784, 3 * 2 * 16 * 16)
 
 

@@ -9,7 +9,7 @@ from transformers import AutoTokenizer, Qwen3VLProcessor
 from transformers.models.qwen2_vl.image_processing_pil_qwen2_vl import Qwen2VLImageProcessorPil
 
 from jax3dc.processing.chat import IGNORE_INDEX, VL_CHAT_TEMPLATE, encode_chat, render_chat
-from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images
+from jax3dc.processing.processor import ImageProcessorConfig, image_token_counts, preprocess_images
 from jax3dc.processing.tokenizer import default_tokenizer_dir, load_tokenizer
 
 
@@ -79,7 +79,7 @@ def test_training_example_token_identical(hf_processor, tokenizer, system: bool)
     np.testing.assert_array_equal(processed.pixel_values, expected["pixel_values"])
     image_positions = ours.input_ids == tokenizer.special.image_pad
     np.testing.assert_array_equal(image_positions, expected["mm_token_type_ids"][0] == 1)
-    assert image_positions.sum() == sum(processed.num_tokens(merge_size=2))
+    assert image_positions.sum() == sum(image_token_counts(processed.image_grid_thw, 2))
 
 
 def test_generation_prompt_token_identical(hf_processor, tokenizer) -> None:

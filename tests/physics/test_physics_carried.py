@@ -1,11 +1,11 @@
-"""A jointed part that another joint's sweep carries into a third part is blamed (eval.physics.verdict)."""
+"""A jointed part that another joint's sweep carries into a third part is blamed (jax3dc.physics.verdict)."""
 
 from __future__ import annotations
 
 from data_pipeline.factories import generate_object
-from eval.physics.ground_truth import changes_motion
-from eval.physics.mutations import mutations_of
-from eval.physics.verdict import check_object
+from eval.verdict_accuracy.ground_truth import changes_motion
+from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.physics.verdict import check_object
 
 
 def test_rack_hung_on_the_dishwasher_door_is_swung_through_the_tub():

@@ -1,4 +1,4 @@
-"""Physics plausibility checks (eval.physics): ground truth passes, broken articulations are caught."""
+"""Physics plausibility checks (jax3dc.physics): ground truth passes, broken articulations are caught."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ import pytest
 import trimesh
 
 from data_pipeline.factories import generate_object
-from eval.physics.mutations import mutations_of
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.verdict import check_object
+from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.verdict import check_object
 from jax3dc.geometry.convex_pieces import HULL_MAX_VERTICES, convex_pieces
 
 

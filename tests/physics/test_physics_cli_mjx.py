@@ -65,17 +65,17 @@ def test_cli_check_rejects_unusable_input(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_mjx_and_c_give_the_same_penetration_verdicts():
-    from eval.physics.cpu_backend import pair_distances
-    from eval.physics.mjx_backend import mjx_pair_distances
-    from eval.physics.sim_model import SimOptions, build_sim_model
-    from eval.physics.tolerances import PENETRATION_TOL_NU
+    from jax3dc.physics.cpu_backend import pair_distances
+    from jax3dc.physics.mjx_backend import PairDistances
+    from jax3dc.physics.sim_model import SimOptions, build_sim_model
+    from jax3dc.physics.tolerances import PENETRATION_TOL_NU
 
     structure, parts = _lid_box()
     sim = build_sim_model(structure, parts, 0.5, SimOptions())
     rng = np.random.default_rng(0)
     qpos = rng.uniform(-1.8, 1.8, size=(48, sim.model.nq))  # negative angles swing the lid into the base
     c = pair_distances(sim.model, qpos)
-    g = mjx_pair_distances(sim.model, qpos)
+    g = np.asarray(PairDistances(sim.model)(qpos), dtype=np.float64)
     tol = PENETRATION_TOL_NU * 0.5
     pen_c, pen_g = (c < -tol).any(axis=(1, 2)), (g < -tol).any(axis=(1, 2))
     assert pen_c.any() and not pen_c.all()
@@ -108,7 +108,7 @@ def _sweep_build(tmp_path):
 
 
 def test_sweep_reads_the_scale_the_data_build_writes():
-    from eval.physics.cli import record_scale
+    from eval.physics_sweep import record_scale
 
     assert record_scale({"scale_m_per_nu": 0.32, "object_id": "kettle_1"}) == 0.32
     assert record_scale({"scale": 1.5}) == 1.5

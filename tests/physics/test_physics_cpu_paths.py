@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.tolerances import PENETRATION_TOL_NU
+from jax3dc.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.tolerances import PENETRATION_TOL_NU
 
 
 @pytest.fixture(scope="module")

@@ -1,11 +1,11 @@
-"""Thin boards driven through each other (eval.physics.crossing), on hand-built plates."""
+"""Thin boards driven through each other (jax3dc.physics.crossing), on hand-built plates."""
 
 from __future__ import annotations
 
 import numpy as np
 import trimesh
 
-from eval.physics.crossing import crossings
+from jax3dc.physics.crossing import crossings
 from jax3dc.structure.schema import Joint, Node, Structure
 
 

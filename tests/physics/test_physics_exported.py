@@ -1,5 +1,5 @@
 """``jax3dc physics check object.xml``: the exported MJCF file gives the verdict its structure gives,
-and what is checked is the file (eval.physics.exported)."""
+and what is checked is the file (jax3dc.physics.exported)."""
 
 from __future__ import annotations
 
@@ -12,10 +12,10 @@ import pytest
 import trimesh
 
 from data_pipeline.factories import generate_object
-from eval.physics.exported import load_exported
-from eval.physics.ground_truth import GroundTruthObject, factory_objects, imported_objects
-from eval.physics.mutations import mutations_of
-from eval.physics.verdict import check_object
+from jax3dc.physics.exported import load_exported
+from eval.verdict_accuracy.ground_truth import GroundTruthObject, factory_objects, imported_objects
+from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.physics.verdict import check_object
 from jax3dc.cli import main
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.structure import parse_structure

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics.floor import first_below_floor
-from eval.physics.kinematics import joint_motion
-from eval.physics.tolerances import LIMIT_TOL_HINGE_RAD
-from eval.physics.verdict import _pivot_attached, check_object
+from jax3dc.physics.floor import first_below_floor
+from jax3dc.physics.kinematics import joint_motion
+from jax3dc.physics.tolerances import LIMIT_TOL_HINGE_RAD
+from jax3dc.physics.verdict import _pivot_attached, check_object
 from jax3dc.structure.schema import Structure
 
 
@@ -115,9 +115,9 @@ def _surface_gap(a, b) -> float:
 
 
 def test_part_given_a_parent_it_does_not_touch_is_detached_at_rest():
-    from eval.physics.ground_truth import changes_motion
-    from eval.physics.mutations import mutations_of
-    from eval.physics.tolerances import REST_CONTACT_TOL_NU
+    from eval.verdict_accuracy.ground_truth import changes_motion
+    from eval.verdict_accuracy.mutations import mutations_of
+    from jax3dc.physics.tolerances import REST_CONTACT_TOL_NU
     dishwasher = generate_object("dishwasher", 0)
     s, parts = dishwasher.structure, dishwasher.parts
     truth = check_object(s, parts, dishwasher.scale_m_per_nu, dynamics=False)

@@ -1,4 +1,4 @@
-"""Typed findings (eval.physics.findings): what the checks produce, how the verdict counts them, and a
+"""Typed findings (jax3dc.physics.findings): what the checks produce, how the verdict counts them, and a
 limit far past the first contact as a failure with the value the joint reaches."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics import ground_truth
-from eval.physics.findings import FAILURE, WARNING, Finding, describe
-from eval.physics.tolerances import LIMIT_PAST_CONTACT_HINGE_RAD
-from eval.physics.verdict import check_object, verdict_json
+from eval.verdict_accuracy import ground_truth
+from jax3dc.physics.findings import FAILURE, WARNING, Finding, Verdict, describe
+from jax3dc.physics.tolerances import LIMIT_PAST_CONTACT_HINGE_RAD
+from jax3dc.physics.verdict import check_object
 
 
 def test_findings_round_trip_through_json_and_read_as_the_stable_reasons():
@@ -52,13 +52,13 @@ def test_findings_round_trip_through_json_and_read_as_the_stable_reasons():
 def test_the_verdict_fails_on_failures_only():
     found = [Finding("limit", WARNING, joints=(3,), reachable=2.77, limit="hi"),
              Finding("combination", WARNING, parts=(2, 3))]
-    verdict = verdict_json([3, 5], found)
+    verdict = Verdict((3, 5), tuple(found)).to_json()
     assert verdict["ok"] and verdict["joints"]["3"] == {"ok": True, "reasons": [], "warnings": [describe(found[0])]}
     assert verdict["checks"] == {"rest": [], "combinations": ["combination interpenetration: parts 2,3"], "gravity": []}
     assert [Finding.from_json(d) for d in verdict["findings"]] == found
-    failed = verdict_json([3, 5], found + [Finding("pivot", joints=(5,), parts=(1,))])
+    failed = Verdict((3, 5), (*found, Finding("pivot", joints=(5,), parts=(1,)))).to_json()
     assert not failed["ok"] and failed["joints"]["3"]["ok"] and failed["joints"]["5"]["reasons"] == ["pivot detached"]
-    rest = verdict_json([3], [Finding("rest", parts=(1, 2), depth=0.08)], gravity_checked=False)
+    rest = Verdict((3,), (Finding("rest", parts=(1, 2), depth=0.08),), gravity_checked=False).to_json()
     assert not rest["ok"] and rest["checks"] == {"rest": ["rest interpenetration: parts 1,2"], "combinations": []}
 
 
@@ -85,7 +85,7 @@ def test_a_limit_far_past_the_first_contact_fails_with_where_the_joint_stops():
 
 
 def test_ground_truth_counts_a_warned_joint_as_flagged_but_not_failing(monkeypatch):
-    verdict = verdict_json([3, 5], [Finding("limit", WARNING, joints=(3,), reachable=2.77, limit="hi")])
+    verdict = Verdict((3, 5), (Finding("limit", WARNING, joints=(3,), reachable=2.77, limit="hi"),)).to_json()
     monkeypatch.setattr(ground_truth, "check_object", lambda *args, **kwargs: verdict)
     obj = ground_truth.GroundTruthObject("safe", None, {}, 1.0)
     counts = ground_truth.false_alarms([obj])

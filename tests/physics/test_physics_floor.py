@@ -1,4 +1,4 @@
-"""The floor check (eval.physics.floor): joints that drive a part through the floor the object stands on."""
+"""The floor check (jax3dc.physics.floor): joints that drive a part through the floor the object stands on."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import trimesh
 from scipy.spatial import ConvexHull
 
 from data_pipeline.factories import generate_object
-from eval.physics.floor import _hull_vertices, first_below_floor
-from eval.physics.mutations import mutations_of
-from eval.physics.tolerances import FLOOR_TOL_NU
-from eval.physics.verdict import check_object
+from jax3dc.physics.floor import _hull_vertices, first_below_floor
+from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.physics.tolerances import FLOOR_TOL_NU
+from jax3dc.physics.verdict import check_object
 from jax3dc.structure.schema import Joint, Node, Structure
 
 

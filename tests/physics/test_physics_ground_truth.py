@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics.crossing import crossings
-from eval.physics.findings import WARNING, Finding, describe
-from eval.physics.ground_truth import changes_motion, imported_objects
-from eval.physics.kinematics import SAME_MOTION_TOL_NU, symmetric_about, sweep_distance
-from eval.physics.mutations import mutations_of
-from eval.physics.tolerances import LIMIT_PAST_CONTACT_HINGE_RAD, LIMIT_TOL_HINGE_RAD
-from eval.physics.verdict import check_object
+from jax3dc.physics.crossing import crossings
+from jax3dc.physics.findings import WARNING, Finding, describe
+from eval.verdict_accuracy.ground_truth import changes_motion, imported_objects
+from jax3dc.physics.kinematics import SAME_MOTION_TOL_NU, symmetric_about, sweep_distance
+from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.physics.tolerances import LIMIT_PAST_CONTACT_HINGE_RAD, LIMIT_TOL_HINGE_RAD
+from jax3dc.physics.verdict import check_object
 from jax3dc.structure.schema import Joint
 from tests.shared_fixtures import PARTNET_MOBILITY, partnet_object
 

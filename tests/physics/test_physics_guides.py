@@ -1,4 +1,4 @@
-"""A slide child carried out of the part it runs in (eval.physics.guides)."""
+"""A slide child carried out of the part it runs in (jax3dc.physics.guides)."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics.guides import carried_out_of_guide
-from eval.physics.tolerances import SLIDE_GUIDE_OVERLAP_NU
-from eval.physics.verdict import check_object
+from jax3dc.physics.guides import carried_out_of_guide
+from jax3dc.physics.tolerances import SLIDE_GUIDE_OVERLAP_NU
+from jax3dc.physics.verdict import check_object
 
 
 @pytest.fixture(scope="module")

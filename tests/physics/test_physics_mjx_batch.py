@@ -1,4 +1,4 @@
-"""The batched penetration check across objects (``eval.physics.mjx_batch``): its own forward
+"""The batched penetration check across objects (``jax3dc.physics.mjx_batch``): its own forward
 kinematics against C MuJoCo, and padding to size classes and batching many objects against each
 object checked alone at its exact sizes, on every factory category and every PartNet-Mobility
 fixture: the same distances, hence the same verdicts."""
@@ -11,13 +11,13 @@ import jax
 import mujoco
 import numpy as np
 
-from eval.physics.ground_truth import factory_objects, imported_objects
-from eval.physics.mjx_batch import (EXACT, Shapes, _forward, _needed, _padded, batch_pair_distances, narrow_capacity, object_arrays,
-                                    size_class)
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.states import check_states
-from eval.physics.tolerances import DETACH_TOL_NU
-from eval.physics.verdict import findings_from, verdict_json
+from eval.verdict_accuracy.ground_truth import factory_objects, imported_objects
+from jax3dc.physics.mjx_batch import (EXACT, Shapes, _forward, _needed, _padded, batch_pair_distances, narrow_capacity, object_arrays,
+                                      size_class)
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.states import check_states
+from jax3dc.physics.tolerances import DETACH_TOL_NU
+from jax3dc.physics.verdict import KINEMATIC_CHECKS, CheckRun, run_checks
 from tests.physics.test_physics_ground_truth import PARTNET_MOBILITY
 
 
@@ -90,8 +90,8 @@ def test_padding_and_batching_change_no_verdict():
         np.testing.assert_allclose(depth[1], depth[0], atol=1e-5, err_msg=obj.name)  # 0.01 mm: float32 sums in another order
         penetrating += int((depth[0] < -1e-4).sum())
         proximity_stub = np.where(np.isfinite(alone), alone, -1.0)  # every pair touching: the detachment checks stay quiet
-        verdicts = [json.dumps(verdict_json(sim.joint_parts, findings_from(obj.structure, obj.parts, sim, state, d,
-                                                                           proximity_stub), False))
+        verdicts = [json.dumps(run_checks(CheckRun(obj.structure, obj.parts, sim, state, d, proximity_stub, None, False),
+                                          KINEMATIC_CHECKS).to_json())
                     for d in (alone, batched)]
         assert verdicts[0] == verdicts[1], obj.name
     assert penetrating > 1000  # the objects interpenetrate here and there: the comparison covers real contacts

@@ -1,4 +1,4 @@
-"""The batched MJX penetration check (``eval.physics.mjx_backend``) against plain references:
+"""The batched MJX penetration check (``jax3dc.physics.mjx_backend``) against plain references:
 a brute-force separating-axis test in numpy (every face normal, every edge pair), C MuJoCo on
 the same joint states, and itself without the broad phase."""
 
@@ -12,8 +12,8 @@ import pytest
 from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
-from eval.physics import mjx_backend
-from eval.physics.mjx_backend import CHUNK_ITEMS, PairDistances, capacity_for, penetration_depth
+from jax3dc.physics import mjx_backend
+from jax3dc.physics.mjx_backend import CHUNK_ITEMS, PairDistances, capacity_for, penetration_depth
 
 
 def _brute_force_depth(a: np.ndarray, b: np.ndarray) -> float:
@@ -71,7 +71,7 @@ def test_penetration_depth_is_the_separating_axis_depth():
 
 def _cabinet():
     from data_pipeline.factories import generate_object
-    from eval.physics.sim_model import SimOptions, build_sim_model
+    from jax3dc.physics.sim_model import SimOptions, build_sim_model
 
     obj = generate_object("cabinet", 0)
     sim = build_sim_model(obj.structure, obj.parts, obj.scale_m_per_nu, SimOptions())
@@ -86,7 +86,7 @@ def _cabinet():
 
 @pytest.mark.slow
 def test_batched_check_matches_c_mujoco_and_needs_no_pair_the_broad_phase_drops(monkeypatch):
-    from eval.physics.cpu_backend import pair_distances
+    from jax3dc.physics.cpu_backend import pair_distances
 
     sim, qpos = _cabinet()
     check = PairDistances(sim.model)
@@ -128,8 +128,8 @@ def test_non_mesh_collision_geoms_are_refused_by_name():
 def test_objects_of_one_structure_share_the_narrow_phase_compile():
     """A lid box at two scales: same bodies, pairs and padded hull sizes, other numbers; the second
     compiles no new narrow phase, and each gives its own (C-checked) answer."""
-    from eval.physics.cpu_backend import pair_distances
-    from eval.physics.sim_model import SimOptions, build_sim_model
+    from jax3dc.physics.cpu_backend import pair_distances
+    from jax3dc.physics.sim_model import SimOptions, build_sim_model
     from tests.physics.test_physics_cli_mjx import _lid_box
 
     structure, parts = _lid_box()
@@ -149,7 +149,7 @@ def test_objects_of_one_structure_share_the_narrow_phase_compile():
 def test_both_backends_give_the_same_kinematic_verdicts():
     """``check_object`` on C MuJoCo and on the batched MJX check: a good lid and one hinged the
     wrong way (it swings into its base), same verdicts and reasons."""
-    from eval.physics.verdict import check_object
+    from jax3dc.physics.verdict import check_object
     from jax3dc.structure import parse_structure, to_json
     from tests.physics.test_physics_cli_mjx import _lid_box
 

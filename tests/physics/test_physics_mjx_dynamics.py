@@ -6,11 +6,11 @@ import re
 
 import numpy as np
 
-from eval.physics import cpu_backend
-from eval.physics.dynamics import SETTLE_STEPS
-from eval.physics.mjx_dynamics import mjx_final_qpos
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.verdict import check_object
+from jax3dc.physics import cpu_backend
+from jax3dc.physics.dynamics import SETTLE_STEPS
+from jax3dc.physics.mjx_dynamics import mjx_final_qpos
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.verdict import check_object
 from jax3dc.structure import parse_structure, to_json
 from tests.physics.test_physics_cli_mjx import _box, _lid_box
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from eval.physics import mjx_private
+from jax3dc.physics import mjx_private
 from jax3dc.errors import SetupError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -33,4 +33,4 @@ def test_installed_version_is_supported_and_checked_on_import(monkeypatch):
 def test_no_other_module_imports_mjx_internals():
     files = subprocess.run(["git", "grep", "--untracked", "-l", "-E", r"mjx\._src|mjx import _src", "--", "*.py"],
                            cwd=ROOT, capture_output=True, text=True).stdout.split()
-    assert [f for f in files if not f.startswith("tests/")] == ["eval/physics/mjx_private.py"]
+    assert [f for f in files if not f.startswith("tests/")] == ["jax3dc/physics/mjx_private.py"]

@@ -1,4 +1,4 @@
-"""Crossings (eval.physics.crossing): thin convex collision pieces of a one-mesh part are boards too
+"""Crossings (jax3dc.physics.crossing): thin convex collision pieces of a one-mesh part are boards too
 (with no edge where another piece of the part goes on), and a moving board passing through a part
 that stays is caught (and blamed on that part's joint)."""
 
@@ -10,11 +10,11 @@ import numpy as np
 import trimesh
 
 from data_pipeline.factories import generate_object
-from eval.physics.crossing import _piece_boards, crossings
-from eval.physics.ground_truth import imported_objects
-from eval.physics.mutations import mutations_of
-from eval.physics.tolerances import CROSSING_MARGIN_NU
-from eval.physics.verdict import check_object
+from jax3dc.physics.crossing import _piece_boards, crossings
+from eval.verdict_accuracy.ground_truth import imported_objects
+from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.physics.tolerances import CROSSING_MARGIN_NU
+from jax3dc.physics.verdict import check_object
 from jax3dc.geometry.convex_pieces import convex_pieces
 from tests.shared_fixtures import partnet_object
 

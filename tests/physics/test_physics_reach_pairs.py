@@ -1,5 +1,5 @@
 """The reachability model collides only the collision pieces a joint's sweep brings near each other
-(eval.physics.dynamics.reachability_model): the same rollouts as colliding every piece pair of the
+(jax3dc.physics.dynamics.reachability_model): the same rollouts as colliding every piece pair of the
 part pairs in contact, with far fewer pairs for MJX to compile."""
 
 from __future__ import annotations
@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics import cpu_backend, dynamics
-from eval.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
-from eval.physics.findings import describe
-from eval.physics.ground_truth import imported_objects
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.states import check_states
-from eval.physics.tolerances import DETACH_TOL_NU, PENETRATION_TOL_NU, RECONTACT_DEPTH_NU
+from jax3dc.physics import cpu_backend, dynamics
+from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
+from jax3dc.physics.findings import describe
+from eval.verdict_accuracy.ground_truth import imported_objects
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.states import check_states
+from jax3dc.physics.tolerances import DETACH_TOL_NU, PENETRATION_TOL_NU, RECONTACT_DEPTH_NU
 from tests.shared_fixtures import partnet_object
 
 

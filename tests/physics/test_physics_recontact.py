@@ -1,4 +1,4 @@
-"""A servo stopped by a contact its own sweep makes anew (eval.physics.dynamics.tolerated_pairs)."""
+"""A servo stopped by a contact its own sweep makes anew (jax3dc.physics.dynamics.tolerated_pairs)."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import generate_object
-from eval.physics.dynamics import tolerated_pairs
-from eval.physics.sim_model import SimOptions, build_sim_model
-from eval.physics.states import check_states
-from eval.physics import cpu_backend
-from eval.physics.tolerances import DETACH_TOL_NU, PENETRATION_TOL_NU, RECONTACT_DEPTH_NU
-from eval.physics.ground_truth import imported_objects
-from eval.physics.verdict import check_object
+from jax3dc.physics.dynamics import tolerated_pairs
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.states import check_states
+from jax3dc.physics import cpu_backend
+from jax3dc.physics.tolerances import DETACH_TOL_NU, PENETRATION_TOL_NU, RECONTACT_DEPTH_NU
+from eval.verdict_accuracy.ground_truth import imported_objects
+from jax3dc.physics.verdict import check_object
 from tests.shared_fixtures import partnet_object
 
 

@@ -1,4 +1,4 @@
-"""Related parts articulate alike (eval.physics.relations): hand-built mirrored doors and the
+"""Related parts articulate alike (jax3dc.physics.relations): hand-built mirrored doors and the
 factories' own symmetric and instance pairs."""
 
 from __future__ import annotations
@@ -9,11 +9,11 @@ import pytest
 import trimesh
 
 from data_pipeline.factories import generate_object
-from eval.physics.findings import Finding, describe
-from eval.physics.mutations import mutations_of
-from eval.physics.relations import relation_disagreements
-from eval.physics.tolerances import RELATION_MOTION_TOL_NU
-from eval.physics.verdict import check_object
+from jax3dc.physics.findings import Finding, describe
+from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.physics.relations import relation_disagreements
+from jax3dc.physics.tolerances import RELATION_MOTION_TOL_NU
+from jax3dc.physics.verdict import check_object
 from jax3dc.structure.schema import Joint, Node, Relation, Structure
 
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from data_pipeline.importers.frames import rpy_matrix
-from eval.physics.dynamics import _tilt
-from eval.physics.kinematics import joint_motion
+from jax3dc.physics.dynamics import _tilt
+from jax3dc.physics.kinematics import joint_motion
 from jax3dc.export.blender import axis_to_z_rotation
 from jax3dc.structure.schema import Joint
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from data_pipeline.factories import FACTORIES, generate_object
-from eval.physics.dynamics import gravity
-from eval.physics.findings import describe
-from eval.physics.ground_truth import factory_objects
-from eval.physics.tolerances import GRAVITY_TILT_RAD
+from jax3dc.physics.dynamics import gravity
+from jax3dc.physics.findings import describe
+from eval.verdict_accuracy.ground_truth import factory_objects
+from jax3dc.physics.tolerances import GRAVITY_TILT_RAD
 
 
 def test_free_standing_faucet_falls_over_but_passes_mounted():
@@ -29,7 +29,7 @@ def test_mounted_object_still_gets_the_sag_test(monkeypatch):
     # the spout's hinge is held by its servo: with no tolerance for the servo's give, the held
     # root does not stop the sag test from reporting it
     obj = generate_object("faucet", 0)
-    monkeypatch.setattr("eval.physics.dynamics.GRAVITY_JOINT_DRIFT", -1.0)
+    monkeypatch.setattr("jax3dc.physics.dynamics.GRAVITY_JOINT_DRIFT", -1.0)
     found = gravity(obj.structure, obj.parts, obj.scale_m_per_nu, None, mounted=True)
     jointed = {p for p, n in obj.structure.nodes.items() if n.joint is not None}
     assert jointed and {f.joints[0] for f in found if f.check == "sag"} == jointed, found

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from data_pipeline.factories import FACTORIES, generate_object
-from eval.physics.verdict import check_object
+from jax3dc.physics.verdict import check_object
 
 BENCH = Path(__file__).resolve().parents[2] / "bench"
 

@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from eval.predict import predict
-from eval.predict.segmentation import load_camera
+from jax3dc.predict import predict
+from jax3dc.predict.segmentation import load_camera
 from jax3dc.cli import main
 from jax3dc.errors import InputFileError, ProgramError, StructureError
 from predict_cases import CAMERA, factory_object, target_json, write_glb, write_image

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.predict.mesh_input import load_segmented_mesh, natural_key
-from eval.predict.segmentation import render_segmentation
-from eval.predict.stage1 import stage1_from_mesh
+from jax3dc.predict.mesh_input import load_segmented_mesh, natural_key
+from jax3dc.predict.segmentation import render_segmentation
+from jax3dc.predict.stage1 import stage1_from_mesh
 from jax3dc.errors import InputFileError
 from jax3dc.geometry.parts import normalise_parts
 from jax3dc.palette import object_palette
@@ -101,7 +101,7 @@ def write_text(path, text):
 
 
 def test_own_glb_export_reads_back_with_the_same_ids(tmp_path):
-    from eval.predict import predict
+    from jax3dc.predict import predict
     from predict_cases import CAMERA, target_json, write_image
 
     first = predict(write_image(tmp_path / "image.png"), f"mesh:{write_glb(tmp_path / 'object.glb')}",

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from eval.predict.mesh_input import Y_UP_TO_Z_UP, load_segmented_mesh
+from jax3dc.predict.mesh_input import Y_UP_TO_Z_UP, load_segmented_mesh
 from jax3dc.errors import InputFileError
 from jax3dc.palette import PALETTE_SIZE
 from predict_cases import factory_object

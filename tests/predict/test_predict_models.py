@@ -2,8 +2,8 @@
 
 Its output is garbage, so the structure model's text is an invalid structure and the code
 model's text an invalid program: both must end in the typed errors with the raw text kept. The
-in-memory (I, S) generation must give exactly what eval.generation gives for the same images and
-prompt in a Record. (The test with tiny *trained* models is the lead's.)
+in-memory (I, S) of predict goes through the same sampler as a Record's: its reply is the batched
+sample's, without the stop token. (The test with tiny *trained* models is the lead's.)
 """
 
 from __future__ import annotations
@@ -11,7 +11,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from PIL import Image
 
 from predict_cases import CAMERA, write_glb, write_image
 from tests.tiny_checkpoint import write_tiny_checkpoint
@@ -35,11 +34,9 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
     import jax
 
     from data_pipeline.record import Record
-    from eval.generation import DecodeOptions, Generator
-    from eval.predict.models import generate_text
-    from eval.predict.pipeline import predict
     from jax3dc.errors import StructureError
-    from jax3dc.prompt import chat_messages
+    from jax3dc.predict.pipeline import predict
+    from jax3dc.sampler import DecodeOptions, Sampler
 
     out = tmp_path / "out"
     with pytest.raises(StructureError):  # a random model, unconstrained, does not write a valid structure
@@ -48,21 +45,18 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
     raw = (out / "structure_raw.txt").read_text()
     assert (out / "report.html").exists() and not (out / "structure.json").exists()
 
-    generator = Generator.load(checkpoint, dtype="float32")
-    image, seg = Image.open(inputs[0]).convert("RGB"), Image.open(out / "seg.png").convert("RGB")
-    text = (out / "prompt.txt").read_text()
+    sampler = Sampler.load(checkpoint, dtype="float32")
+    record = Record("x", inputs[0].read_bytes(), (out / "seg.png").read_bytes(), (out / "prompt.txt").read_text(), "")
     with jax.default_matmul_precision("highest"):
-        alone = generate_text(generator, [image, seg], chat_messages(text), MAX_NEW_TOKENS)
-        record = Record("x", inputs[0].read_bytes(), (out / "seg.png").read_bytes(), text, "")
-        batched = generator.generate_batch([generator.prompt(record)], 1, MAX_NEW_TOKENS, bucket=1,
-                                           options=DecodeOptions(constrained=False))[0][0].text
-    assert alone == raw
-    assert batched in (alone, alone + "<|im_end|>", alone + "<|endoftext|>")  # eval keeps the stop token
+        sample = sampler.generate_batch([sampler.prompt(record)], 1, MAX_NEW_TOKENS, bucket=1,
+                                        options=DecodeOptions(constrained=False))[0][0]
+    assert sample.reply == raw
+    assert sample.text in (raw, raw + "<|im_end|>", raw + "<|endoftext|>")  # eval keeps the stop token
 
 
 @pytest.mark.slow
 def test_code_model_garbage_is_a_program_error_with_the_program_kept(checkpoint, inputs, tmp_path):
-    from eval.predict.pipeline import predict
+    from jax3dc.predict.pipeline import predict
     from jax3dc.errors import ProgramError
 
     with pytest.raises(ProgramError):
@@ -72,11 +66,11 @@ def test_code_model_garbage_is_a_program_error_with_the_program_kept(checkpoint,
 
 
 def test_a_checkpoint_folder_is_loaded_once(tmp_path, monkeypatch):
-    from eval.generation import Generator
-    from eval.predict.pipeline import Checkpoints
+    from jax3dc.sampler import Sampler
+    from jax3dc.predict.pipeline import Checkpoints
 
     loads = []
-    monkeypatch.setattr(Generator, "load", classmethod(lambda cls, folder, dtype: loads.append(folder) or object()))
+    monkeypatch.setattr(Sampler, "load", classmethod(lambda cls, folder, dtype: loads.append(folder) or object()))
     checkpoints = Checkpoints("float32")
     (tmp_path / "a").mkdir()
     first = checkpoints.get(tmp_path / "a")

@@ -13,8 +13,8 @@ import json
 import mujoco
 
 from data_pipeline.factories import generate_object
-from eval.physics.verdict import check_object
-from eval.predict import predict
+from jax3dc.physics.verdict import check_object
+from jax3dc.predict import predict
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.structure import canonicalize, parse_structure, to_json
 from predict_cases import write_image

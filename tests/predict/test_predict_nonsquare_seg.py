@@ -1,6 +1,6 @@
 """S of a non-square image: its own aspect with the camera's vertical field of view (45 degrees unless given).
 
-References: a pinhole projection of the object's vertices (eval.overlay.project, independent of
+References: a pinhole projection of the object's vertices (jax3dc.overlay.project, independent of
 MuJoCo), and the square dataset render, whose central columns a same-height view must reproduce.
 """
 
@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.overlay import project
-from eval.predict.segmentation import camera_from_dict, render_part_ids
+from jax3dc.overlay import project
+from jax3dc.predict.segmentation import camera_from_dict, render_part_ids
 from jax3dc.errors import InputFileError
 from predict_cases import CAMERA, factory_object
 

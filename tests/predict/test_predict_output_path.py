@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from data_pipeline.render import mujoco, png_array  # mujoco imported after render chose the GL backend
-from eval.predict import predict
+from jax3dc.render import mujoco, png_array  # mujoco imported after render chose the GL backend
+from jax3dc.predict import predict
 from jax3dc.geometry.parts import load_parts
 from jax3dc.prompt import CODE_PROMPT, LEGEND_HEADER
 from jax3dc.structure import parse_structure, to_json

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from eval.predict import predict
-from eval.predict.report import PANEL
+from jax3dc.predict import predict
+from jax3dc.predict.report import PANEL
 from jax3dc.palette import hex_colour, part_colour
 from predict_cases import factory_object, target_json, write_image
 
@@ -59,7 +59,7 @@ def test_png_has_image_seg_and_text_panels(code_run):
 
 
 def test_joints_go_on_s_without_the_image_camera(code_run, tmp_path):
-    from eval.predict.report import panels
+    from jax3dc.predict.report import panels
     from predict_cases import CAMERA
 
     captions = [caption for caption, _ in panels(_inputs(code_run, camera_given=False))]
@@ -71,7 +71,7 @@ def test_joints_go_on_s_without_the_image_camera(code_run, tmp_path):
 
 
 def _inputs(result, camera_given, camera=None):
-    from eval.predict.report import ReportInputs
+    from jax3dc.predict.report import ReportInputs
     from jax3dc.geometry.parts import part_boxes
 
     return ReportInputs(Image.open(result.out.parent / "image.png"), np.asarray(Image.open(result.out / "seg.png")),
@@ -89,7 +89,7 @@ def test_relations_are_listed(code_run):
 
 def test_a_joint_warning_is_written_beside_its_passing_verdict(code_run):
     """A verdict's warning (a limit past contact, say) shows in the part list and does not fail it."""
-    from eval.predict.report import ReportInputs, tree_lines
+    from jax3dc.predict.report import ReportInputs, tree_lines
 
     structure = code_run.structure
     jointed = next(pid for pid, node in structure.nodes.items() if node.joint is not None)

@@ -21,9 +21,9 @@ import pytest
 import trimesh
 
 from data_pipeline.factories import generate_object
-from data_pipeline.render import mujoco  # mujoco imported after render chose the GL backend
+from jax3dc.render import mujoco  # mujoco imported after render chose the GL backend
 from data_pipeline.shards import shard_paths
-from eval.generation import read_records
+from eval.records import read_records
 from jax3dc.cli import main
 from jax3dc.geometry.parts import save_parts
 from jax3dc.structure import parse_structure

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from eval.predict import predict
+from jax3dc.predict import predict
 from jax3dc.cli import main
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.structure import canonicalize, to_json

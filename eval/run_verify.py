@@ -1,0 +1,92 @@
+"""The verification stage of ``jax3dc eval run``: candidates chosen by the physics verdict, the
+winner repaired, one line per object in ``verified.jsonl`` (resumable like predictions.jsonl).
+
+A line says which candidate won and why, its verdict, and each repair (part, kind, joint before
+and after); its ``text`` is the structure that is scored: the repaired one where a repair was
+kept, else the winner (canonical JSON), else the winner's raw text when nothing parses.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from data_pipeline.record import Record
+from eval.run_verify_pool import Job, Verified, verify_many
+from jax3dc.sampler import read_predictions_file
+from jax3dc.structure import to_json
+from jax3dc.verify.select import Candidate
+
+
+@dataclass
+class VerifyStats:
+    """What this call verified (objects already in verified.jsonl are not counted)."""
+
+    objects: int = 0
+    reasons: Counter = field(default_factory=Counter)
+    repaired_objects: int = 0
+    repairs: int = 0
+    seconds: float = 0.0
+
+    def summary(self) -> str:
+        if not self.objects:
+            return "nothing to verify: every key is already in verified.jsonl"
+        reasons = "; ".join(f"{n}× {r}" for r, n in self.reasons.most_common())
+        return (f"verified {self.objects} objects in {self.seconds:.1f} s ({self.seconds / self.objects:.2f} s each): "
+                f"{reasons}; {self.repairs} repairs kept on {self.repaired_objects} objects")
+
+
+def candidates_of(line: Mapping[str, Any]) -> tuple[Candidate, ...]:
+    """A predictions.jsonl line's candidates (one line without ``candidates`` is one candidate)."""
+    items = line.get("candidates") or [line]
+    return tuple(Candidate(str(c["text"]), float(c.get("logprob", 0.0))) for c in items)
+
+
+def verified_line(result: Verified, candidates: Sequence[Candidate]) -> dict[str, Any]:
+    choice, fixed = result.choice, result.repaired
+    row = choice.rows[choice.index]
+    line: dict[str, Any] = {"key": result.key, "candidate": choice.index, "of": len(candidates), "reason": choice.reason,
+                            "ok": row.ok, "flagged": row.flagged, "repairs": []}
+    if fixed is not None and fixed.repairs:
+        line["text"] = to_json(fixed.structure)
+        line["ok"] = fixed.after.ok
+        line["repairs"] = [r.to_dict() for r in fixed.repairs]
+    elif choice.structure is not None:
+        line["text"] = to_json(choice.structure)
+    else:
+        line["text"] = candidates[choice.index].text
+    return line
+
+
+def verify_predictions(records: Sequence[Record], lines: Mapping[str, Mapping[str, Any]], out_path: Path, workers: int,
+                       repair: bool, sources: Mapping[str, Path] | None = None, backend: str = "c",
+                       chunk: int | None = None) -> tuple[dict[str, str], VerifyStats]:
+    """Key -> the text to score for every record, verifying only keys not yet in ``out_path``."""
+    done = read_predictions_file(out_path)
+    todo = [r for r in records if r.key not in done]
+    stats = VerifyStats()
+    chunk = chunk or max(1, 2 * workers)
+    start = time.perf_counter()
+    with out_path.open("a", encoding="utf-8") as f, tqdm(total=len(todo), desc="verifying", unit="obj") as bar:
+        for lo in range(0, len(todo), chunk):
+            batch = todo[lo:lo + chunk]
+            jobs = [Job(r, candidates_of(lines[r.key]), dict(sources or {}), repair) for r in batch]
+            for job, result in zip(jobs, verify_many(jobs, workers, backend)):
+                line = verified_line(result, job.candidates)
+                f.write(json.dumps(line, separators=(",", ":")) + "\n")
+                done[line["key"]] = line
+                stats.objects += 1
+                stats.reasons[line["reason"]] += 1
+                stats.repairs += len(line["repairs"])
+                stats.repaired_objects += bool(line["repairs"])
+            f.flush()
+            bar.update(len(batch))
+    stats.seconds = time.perf_counter() - start
+    return {r.key: done[r.key]["text"] for r in records}, stats

@@ -1,0 +1,238 @@
+"""Thin parts passing through each other while a joint sweeps: what contact depth cannot see.
+
+A contact's depth is the shortest move that separates two convex pieces, so a thin panel driven
+right through another (a laptop screen folded through its base, a lid swung through a wall) is
+never deeper than the thinner panel: below ``PENETRATION_TOL_NU`` for boards a few hundredths of
+the object thick. Here a moved part *passes through* a board (a thin connected component of another
+part, in its own oriented box, at most ``BOARD_MAX_THICKNESS_NU`` thick) when, along the joint's path
+from rest, one of its points goes from more than ``CROSSING_MARGIN_NU`` beyond one face to more than
+that beyond the other, meeting the board's plane over its material (a cell of its face the board
+covers, a cell in from its edges: not a ring's hole, nor round a rim's edge). A board may also be
+a thin convex collision piece of a part modelled as one closed mesh (a bucket's wall); where such a
+piece meets another piece of its part (a carcass's back wall on its floor) the wall goes on, so
+that edge is no edge to pass round (a turntable swung out through the corner). The
+moving part may be the board (a door leaf swung through a handle that stays). Parts lying across
+a board's plane at rest (a sash in its frame, a shaft through its panel) are left alone. Pure numpy on the
+rest-frame meshes; joint values as in the sweep (rad / nu), every other joint at rest.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+from scipy.ndimage import binary_erosion
+
+from jax3dc.physics.kinematics import joint_motion
+from jax3dc.physics.tolerances import CROSSING_MARGIN_NU
+from jax3dc.structure.schema import Structure
+
+MAX_BOARDS_PER_PART = 128  # beyond this a part counts as one component (its oriented box)
+SURFACE_SAMPLES = 600  # points per moved part
+MIN_BOARD_NU = 0.05  # boards smaller than this across their face are left out (screws, hinge pins)
+CROSSING_CELL_NU = 0.03  # resolution of a board's face map (where its material is)
+FLUSH_NU = 0.005  # a point this close to a board's face at rest is flush with it, not past it
+CROSSING_STEP_NU = 0.02  # largest point travel between the path states checked (a board's margin)
+JOIN_GAP_NU = 0.01  # a collision piece this close beyond a piece board's edge, across its thickness, continues the wall
+BOARD_MAX_THICKNESS_NU = 0.06  # thicker components are not boards: a part through them is deeper than
+# PENETRATION_TOL_NU, and a bulky concave one (a bucket as one mesh) is straddled, not crossed
+
+
+@dataclass(frozen=True)
+class Board:
+    """A thin component in its oriented box: centre, axes (rows, thin axis first), half extents,
+    which CROSSING_CELL_NU cells of its face its material covers (less a cell at its free edges),
+    and how far inside each edge a crossing must meet its plane."""
+
+    centre: np.ndarray
+    axes: np.ndarray
+    half: np.ndarray
+    covered: np.ndarray  # [n_u, n_w] bool
+    inset: np.ndarray  # [2 (u, w), 2 (low, high edge)]: CROSSING_MARGIN_NU at a free edge, 0 where the wall goes on
+
+    def cells_of(self, uw: np.ndarray) -> np.ndarray:
+        grid = np.zeros(self.covered.shape, dtype=bool)
+        index = np.floor((uw + self.half[1:]) / CROSSING_CELL_NU).astype(int)
+        index = np.clip(index, 0, np.array(self.covered.shape) - 1)
+        grid[index[:, 0], index[:, 1]] = True
+        return grid
+
+
+def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: dict[int, np.ndarray],
+              pieces: dict[int, list[np.ndarray]] | None = None) -> dict[int, tuple[int, float]]:
+    """Per jointed part: (other part, joint value) of the first value of its sweep (in the given
+    order) by which the subtree its joint moves has passed through a board of another part, or a
+    board of the subtree through another part (absent: never). The path from rest to each value is followed in steps of at most
+    CROSSING_STEP_NU of point travel, so a part that goes round a board's edge is not crossing it.
+
+    ``pieces``: per part, the vertices (object frame, nu) of its convex collision pieces; the thin
+    ones are boards too (the walls of a bucket or carcass modelled as one closed mesh)."""
+    boards = {p: _boards(mesh) + _piece_boards((pieces or {}).get(p, [])) for p, mesh in parts.items()}
+    surfaces = {p: _surface(mesh) for p, mesh in parts.items()}
+    out = {}
+    for part, values in sweeps.items():
+        joint = structure.nodes[part].joint
+        moved = structure.subtree(part)
+        points = np.concatenate([surfaces[p] for p in sorted(moved)])
+        still = [p for p in sorted(structure.nodes) if p not in moved]
+        candidates = [(p, b) for p in still for b in boards[p]]
+        # ... and a moving board through a part that stays (a door swung through a handle left on
+        # the frame): in the board's own frame that part's points move back along the path
+        carried = [(q, b) for q in sorted(moved) for b in boards[q]]
+        if not candidates and not carried:
+            continue
+        everything = np.concatenate([points] + [surfaces[p] for p in still]) if carried else points
+        reach = float(np.max(np.linalg.norm(everything - np.asarray(joint.pivot), axis=1))) if joint.type == "hinge" else 1.0
+        first: dict[float, int] = {}  # the value at which each direction's path first crosses -> part
+        for end in (max(float(np.max(values)), 0.0), min(float(np.min(values)), 0.0)):
+            steps = int(np.ceil(abs(end) * reach / CROSSING_STEP_NU))
+            tracks = [(p, _Track(b, points)) for p, b in candidates if not _straddles(points, b)]
+            backwards = [(p, _Track(b, surfaces[p])) for p in still for _, b in carried if not _straddles(surfaces[p], b)]
+            for v in np.linspace(0.0, end, steps + 1)[1:]:
+                posed = joint_motion(joint, float(v), points)
+                hit = next((p for p, track in tracks if track.passes_through(posed)), None)
+                if hit is None and backwards:
+                    back = {p: joint_motion(joint, -float(v), surfaces[p]) for p in {p for p, _ in backwards}}
+                    hit = next((p for p, track in backwards if track.passes_through(back[p])), None)
+                if hit is not None:
+                    first[float(v)] = hit
+                    break
+        for v in values:  # report the first of the given values that lies at or past a crossing
+            past = [c for c in first if (c > 0 and v >= c - 1e-12) or (c < 0 and v <= c + 1e-12)]
+            if past:
+                out[part] = (first[past[0]], float(v))
+                break
+    return out
+
+
+def _straddles(points: np.ndarray, board: Board) -> bool:
+    """The part lies across the board's plane at rest (a sash in its frame, a shaft through its
+    panel): it has no one side to pass from."""
+    t = (points - board.centre) @ board.axes[0]
+    return bool(t.max() > board.half[0] + FLUSH_NU and t.min() < -board.half[0] - FLUSH_NU)
+
+
+class _Track:
+    """Which side of a board each point was last seen clearly beyond (CROSSING_MARGIN_NU past a
+    face, or outside it at all at rest), and where: a point next seen beyond the other face went through the board's plane in
+    between, over the board's material if the line between the two sightings meets it there."""
+
+    def __init__(self, board: Board, points: np.ndarray):
+        self.board = board
+        self.limit = board.half[0] + CROSSING_MARGIN_NU
+        local = self._local(points)
+        # at rest a point on a face (a lid lying on its box) already counts as on that side
+        self.side = np.where(np.abs(local[:, 0]) > board.half[0], np.sign(local[:, 0]), 0).astype(int)
+        self.seen = local
+
+    def _local(self, points: np.ndarray) -> np.ndarray:
+        return (points - self.board.centre) @ self.board.axes.T
+
+    def _side_of(self, local: np.ndarray) -> np.ndarray:
+        return np.where(local[:, 0] > self.limit, 1, np.where(local[:, 0] < -self.limit, -1, 0))
+
+    def passes_through(self, points: np.ndarray) -> bool:
+        local = self._local(points)
+        side = self._side_of(local)
+        flips = (side != 0) & (self.side != 0) & (side != self.side)
+        crossed = False
+        if flips.any():
+            a, b = self.seen[flips], local[flips]
+            w = (a[:, 0] / (a[:, 0] - b[:, 0]))[:, None]
+            at = a[:, 1:] + w * (b[:, 1:] - a[:, 1:])  # where each point met the mid-plane
+            half, inset = self.board.half[1:], self.board.inset
+            inside = np.all((at >= -half + inset[:, 0]) & (at <= half - inset[:, 1]), axis=1)
+            crossed = bool(inside.any()) and bool(np.any(self.board.covered & self.board.cells_of(at[inside])))
+        seen = side != 0
+        self.side = np.where(seen, side, self.side)
+        self.seen = np.where(seen[:, None], local, self.seen)
+        return crossed
+
+
+def _surface(mesh: trimesh.Trimesh) -> np.ndarray:
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    if not len(mesh.faces):
+        return vertices
+    return np.concatenate([vertices[:: max(1, len(vertices) // SURFACE_SAMPLES)],
+                           np.asarray(mesh.sample(SURFACE_SAMPLES, seed=0), dtype=np.float64)])
+
+
+def _boards(mesh: trimesh.Trimesh) -> list[Board]:
+    """The thin connected components of ``mesh`` (see BOARD_MAX_THICKNESS_NU, MIN_BOARD_NU)."""
+    components = mesh.split(only_watertight=False) if len(mesh.faces) else []
+    if not components or len(components) > MAX_BOARDS_PER_PART:
+        components = [mesh]
+    out = []
+    for c in components:
+        v = np.asarray(c.vertices, dtype=np.float64)
+        frame = _thin_frame(v)
+        if frame is None:
+            continue
+        centre, axes, half = frame
+        shape = np.maximum(1, np.ceil(2 * half[1:] / CROSSING_CELL_NU).astype(int))
+        inset = np.full((2, 2), CROSSING_MARGIN_NU)
+        empty = Board(centre, axes, half, np.zeros(shape, dtype=bool), inset)
+        material = np.concatenate([v, np.asarray(c.sample(2000, seed=0), dtype=np.float64)]) if len(c.faces) else v
+        # one cell in from the material's edges: passing a rim's edge is not passing through it
+        covered = binary_erosion(empty.cells_of(((material - centre) @ axes.T)[:, 1:]), np.ones((3, 3)), border_value=0)
+        out.append(Board(centre, axes, half, covered, inset))
+    return out
+
+
+def _piece_boards(pieces: list[np.ndarray]) -> list[Board]:
+    """The thin convex collision pieces of a part as boards: convex, each covers its whole face but
+    a cell at each free edge (an edge where another piece goes on is not free, see ``_joined``)."""
+    out = []
+    pieces = [np.asarray(v, dtype=np.float64) for v in pieces]
+    for i, v in enumerate(pieces):
+        frame = _thin_frame(v)
+        if frame is None:
+            continue
+        centre, axes, half = frame
+        shape = np.maximum(1, np.ceil(2 * half[1:] / CROSSING_CELL_NU).astype(int))
+        joined = _joined(centre, axes, half, [w for j, w in enumerate(pieces) if j != i])
+        covered = np.ones(shape, dtype=bool)
+        for end, index in ((0, 0), (1, -1)):
+            if not joined[0, end]:
+                covered[index, :] = False
+            if not joined[1, end]:
+                covered[:, index] = False
+        out.append(Board(centre, axes, half, covered, np.where(joined, 0.0, CROSSING_MARGIN_NU)))
+    return out
+
+
+def _joined(centre: np.ndarray, axes: np.ndarray, half: np.ndarray, others: list[np.ndarray]) -> np.ndarray:
+    """[2 (u, w), 2 (low, high)] bool: another piece lies across the board's thickness and along
+    its edge, reaching from within JOIN_GAP_NU of that edge on past it (the wall goes on there)."""
+    out = np.zeros((2, 2), dtype=bool)
+    for v in others:
+        local = (v - centre) @ axes.T
+        lo, hi = local.min(axis=0), local.max(axis=0)
+        if hi[0] < -half[0] or lo[0] > half[0]:
+            continue  # not across the board's thickness
+        for axis in (1, 2):
+            along = 3 - axis  # the in-plane axis running along this edge
+            if hi[along] < -half[along] or lo[along] > half[along]:
+                continue
+            out[axis - 1, 0] |= bool(lo[axis] < -half[axis] and hi[axis] >= -half[axis] - JOIN_GAP_NU)
+            out[axis - 1, 1] |= bool(hi[axis] > half[axis] and lo[axis] <= half[axis] + JOIN_GAP_NU)
+    return out
+
+
+def _thin_frame(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(centre, axes (rows, thin axis first), half extents) of the points' oriented box when it is
+    a board (see BOARD_MAX_THICKNESS_NU, MIN_BOARD_NU); None otherwise."""
+    if len(v) < 4:
+        return None
+    try:  # trimesh divides by the zero volume of a flat component's hull on the way
+        with np.errstate(invalid="ignore", divide="ignore"):
+            transform, extents = trimesh.bounds.oriented_bounds(v)
+    except Exception:  # qhull: a flat or degenerate component
+        return None
+    order = np.argsort(extents)
+    half = extents[order] / 2
+    if half[1] * 2 < MIN_BOARD_NU or half[0] * 2 > BOARD_MAX_THICKNESS_NU:
+        return None
+    to_local = transform[:3, :3]  # rows: the box axes in the mesh frame
+    return -to_local.T @ transform[:3, 3], to_local[order], half

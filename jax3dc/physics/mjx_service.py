@@ -1,0 +1,138 @@
+"""The accelerator's side of ``physics sweep --backend mjx``: worker processes prepare objects on
+the CPU and send their kinematic states here; the main process gathers the requests that arrive
+together into one ``mjx_batch`` launch and sends each worker its distances back.
+
+The CPU work of a check (collision pieces, board crossings, guides, rollouts) stays in the
+workers, so the accelerator is fed by every core while it runs the interpenetration sweep of many
+objects at once. A batch is closed when ``batch_objects`` requests are in or ``wait_s`` has passed
+since the first; a failed launch is sent back to each of its workers as the error. Launches are padded
+to the largest shapes met so far (``mjx_batch.Shapes``), so the sweep compiles only when they grow.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import queue
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+# A sweep's first launch is padded to these (most batches of factory objects fit them: up to 26
+# bodies and 1,536 geom pairs an object), so that the shapes seldom grow and recompile.
+SWEEP_START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=2048, hulls=(64, 384),
+                          hull_sizes=((8, 12, 12), (32, 64, 96)))
+
+
+@dataclass
+class ServiceStats:
+    """What the device did over a sweep: launches, objects, and the XLA compiles among them."""
+
+    launches: int = 0
+    objects: int = 0
+    items: int = 0
+    device_s: float = 0.0
+    compiles: int = 0
+    compile_s: float = 0.0
+    phases: dict[str, float] = field(default_factory=dict)  # seconds per phase of the launches (mjx_batch)
+    shapes: object = None  # the shapes the last launch was padded to
+
+    def to_json(self) -> dict[str, float]:
+        return {"launches": self.launches, "objects": self.objects, "states": self.items,
+                "device_s": round(self.device_s, 2), "compiles": self.compiles, "compile_s": round(self.compile_s, 2),
+                "phases_s": {k: round(v, 2) for k, v in self.phases.items()},
+                "shapes": None if self.shapes is None else dataclasses.asdict(self.shapes)}
+
+
+class DeviceService:
+    """Queues between sweep workers and the accelerator; ``serve`` runs in a thread of the main process."""
+
+    def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05):
+        self.requests = context.Queue()
+        self.replies = [context.Queue() for _ in range(workers)]
+        self.next_worker = context.Value("i", 0)
+        self.batch_objects, self.wait_s = batch_objects, wait_s
+        self.stats = ServiceStats()
+
+    def worker_args(self) -> tuple:
+        """The initializer arguments of a worker process (``init_worker``)."""
+        return self.requests, self.replies, self.next_worker
+
+    def serve(self, stop: threading.Event) -> None:
+        from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances
+        from jax3dc.compilation import CompileClock
+
+        clock = CompileClock()
+        # the largest met so far: every launch is padded to it, so compiles happen only as it grows
+        shapes = Shapes(**SWEEP_START_SHAPES)
+        self.stats.shapes = shapes
+        while not stop.is_set():
+            try:
+                batch = [self.requests.get(timeout=0.1)]
+            except queue.Empty:
+                continue
+            deadline = time.monotonic() + self.wait_s
+            while len(batch) < self.batch_objects and (left := deadline - time.monotonic()) > 0:
+                try:
+                    batch.append(self.requests.get(timeout=left))
+                except queue.Empty:
+                    break
+            start = time.perf_counter()
+            try:
+                results, shapes = batch_pair_distances([arrays for _, arrays, _ in batch], [q for _, _, q in batch], shapes,
+                                                       self.stats.phases)
+            except Exception as error:  # noqa: BLE001  (sent back: the worker raises it for its object)
+                results = [error] * len(batch)
+            self.stats.shapes = shapes
+            self.stats.launches += 1
+            self.stats.objects += len(batch)
+            self.stats.items += sum(len(q) for _, _, q in batch)
+            self.stats.device_s += time.perf_counter() - start
+            compiled = clock.elapsed()
+            self.stats.compiles, self.stats.compile_s = int(compiled["compiles"]), compiled["xla_s"]
+            for (worker, _, _), result in zip(batch, results):
+                self.replies[worker].put(result)
+
+
+_CLIENT: "DeviceClient | None" = None
+
+
+@dataclass
+class DeviceClient:
+    """A worker's handle on the service: ``(model, qpos) -> [S, nbody, nbody]`` like ``padded_pair_distances``."""
+
+    worker: int
+    requests: object
+    reply: object
+
+    def __call__(self, model: mujoco.MjModel, qpos: np.ndarray) -> np.ndarray:
+        from jax3dc.physics.mjx_batch import object_arrays
+
+        self.requests.put((self.worker, object_arrays(model), np.asarray(qpos)))
+        result = self.reply.get()
+        if isinstance(result, Exception):
+            raise result
+        return result
+
+
+def init_worker(requests, replies, next_worker) -> None:
+    """Pool initializer: this process's client, and JAX kept off the accelerator (the workers build
+    arrays; only the main process launches)."""
+    global _CLIENT
+    os.environ["JAX_PLATFORMS"] = "cpu"
+    if "jax" in sys.modules:  # imported already (by the job's module): its backends start only on first use
+        sys.modules["jax"].config.update("jax_platforms", "cpu")
+    with next_worker.get_lock():
+        worker = next_worker.value
+        next_worker.value += 1
+    _CLIENT = DeviceClient(worker, requests, replies[worker])
+
+
+def client() -> DeviceClient:
+    if _CLIENT is None:
+        raise RuntimeError("no device service in this process: init_worker was not run")
+    return _CLIENT

@@ -1,0 +1,103 @@
+"""`jax3dc predict IMAGE --stage1 code|mesh:FILE|parts:DIR --structure-model DIR [--code-model DIR] --out DIR`."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from jax3dc.cli_args import positive_int
+from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
+from jax3dc.processing.processor import MAX_IMAGE_PIXELS
+from jax3dc.release import default_structure_model
+
+DESCRIPTION = """\
+Predict the articulated structure of the object in IMAGE and write simulation-ready assets.
+
+Stage 1 gives one mesh per part: `--stage1 code` lets the code model (--code-model) write a part
+program from the image, run by the interpreter; `--stage1 mesh:FILE` reads a part-segmented mesh
+from any tool (a GLB with one node per part, or an OBJ with one group per part; parts named 1..K
+keep those ids, other names are numbered in natural name order); `--stage1 parts:DIR` takes
+ground-truth parts (a folder of <id>.obj, e.g. a dataset object's, to test stage 2 alone). The
+parts are centred with largest extent 1 (the normalised frame). The segmentation S is rendered
+from the image's camera (--camera), and the structure model (--structure-model) reads the image,
+S and the part legend and writes the structure.
+
+Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF: the
+model the physics check judges, its root free unless --mounted),
+object.usda, object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
+with a slider per joint; open it again with `jax3dc view DIR`) (and program.txt for the code backend,
+structure_raw.txt when the model's JSON is invalid), prompt.txt (the structure model's prompt).
+A bad input stops with one error line; the outputs written before it are kept.
+"""
+
+CAMERA_HELP = ("JSON file with the image's camera in the normalised object frame (centre at the origin, "
+               "largest extent 1), as in a record's meta: {\"lookat\": [0, 0, 0], \"distance\": 2.4, "
+               "\"azimuth\": 100, \"elevation\": -20} (MuJoCo free camera, degrees); a meta JSON holding it "
+               "under \"camera\" also works. Default: a front view from slightly above that fits the object")
+
+
+def run(args: argparse.Namespace) -> int:
+    from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
+
+    apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts
+    from jax3dc.predict.pipeline import predict
+    from jax3dc.predict.segmentation import load_camera
+
+    camera = load_camera(args.camera) if args.camera else None
+    width = 18
+
+    def show(name: str, path: Path) -> None:
+        print(f"{name:<{width}} {path}", flush=True)
+
+    result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
+                     scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
+                     constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
+                     mounted=args.mounted, on_output=show, progress=True, max_image_pixels=args.max_image_pixels)
+    verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
+    joints = len(result.structure.joints()) if result.structure else 0
+    held = " with its root held (--mounted)" if args.mounted else ""
+    print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check{held} {verdict} (see physics.json)")
+    return 0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser("predict", help="image in, articulated simulation-ready object out",
+                              description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("image", help="the input image (PNG, JPEG, ...)")
+    p.add_argument("--stage1", required=True, metavar="code|mesh:FILE|parts:DIR",
+                   help="where the part meshes come from: `code` (the code model), `mesh:FILE` (.glb/.gltf/.obj) "
+                        "or `parts:DIR` (a folder of <id>.obj)")
+    p.add_argument("--structure-model", metavar="DIR", default=str(default_structure_model()),
+                   help="stage-2 checkpoint folder (config.json + safetensors; default: the shipped model in "
+                        "jax3dc/release, see its MODEL_CARD.md)")
+    p.add_argument("--code-model", metavar="DIR",
+                   help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
+    p.add_argument("--camera", metavar="FILE", help=CAMERA_HELP)
+    p.add_argument("--out", required=True, metavar="DIR", help="folder for the outputs (created if missing)")
+    p.add_argument("--max-new-tokens", type=int, default=DEFAULT_MAX_NEW_TOKENS, metavar="N",
+                   help=f"most tokens each model may write (default {DEFAULT_MAX_NEW_TOKENS})")
+    p.add_argument("--scale", type=float, metavar="M_PER_NU",
+                   help="metres per normalised unit for the exports (default: the mesh file's units, "
+                        "taken as metres; 1.0 for --stage1 code)")
+    p.add_argument("--mesh-up", choices=("z", "y"), default="z",
+                   help="up axis of the --stage1 mesh file: z (this project's frame, +Z up, front -Y; what "
+                        "jax3dc exports write; the default) or y (glTF's convention, +Y up, front +Z, e.g. Blender's "
+                        "glTF exporter)")
+    p.add_argument("--unconstrained", action="store_true",
+                   help="decode the structure without its grammar (default: the output always parses)")
+    p.add_argument("--candidates", type=positive_int, default=1, metavar="K",
+                   help="K structures from one decode (the first greedy, the rest sampled); the physics verdict "
+                   "chooses, candidates.json says which and why (default 1)")
+    p.add_argument("--repair", action="store_true",
+                   help="move the pivot of each hinge the physics check flags to where child and parent meet, "
+                   "kept only when the verdict improves; repairs.json lists them")
+    p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=False,
+                   help="the object is fixed in place in use (a faucet, a toilet, a door or window frame): the "
+                        "physics check holds its root instead of standing it free on a floor, the candidates "
+                        "and repairs are judged so, and object.xml keeps its base fixed (without it, its root "
+                        "is free, as in the check; default: not mounted; an image names no category)")
+    p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
+                   help="model compute dtype (float32 on CPU is slower but exact)")
+    p.add_argument("--max-image-pixels", type=positive_int, default=MAX_IMAGE_PIXELS, metavar="N",
+                   help="refuse an image of more pixels, read from its header before decoding (default: %(default)s)")
+    p.set_defaults(func=run)

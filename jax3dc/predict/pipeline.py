@@ -1,0 +1,328 @@
+"""`predict`: one image in, a structured, simulation-ready object out (SPEC §1, issue 9).
+
+Steps, each writing its outputs into ``out`` as soon as they exist, so that a failure later on
+leaves every output made before it (and the report says what failed):
+  1. image I (any image Pillow reads; transparency on white, as the model's processor does) -> image.png,
+     and the palette of this image (seeded from its bytes);
+  2. stage 1: part meshes (code model -> part program -> interpreter, a segmented mesh file, or
+     a parts folder) -> parts/ (+ program.txt for the code backend) and the stage-2 prompt -> prompt.txt;
+  3. S rendered from the image's camera -> seg.png;
+  4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
+     canonical); invalid output -> structure_raw.txt and a StructureError;
+  5. exports -> object.urdf, object.xml, object.usda, object.glb, object_blender.py (+ meshes/);
+  6. physics verdict -> physics.json;
+  7. report.html / report.png (always, when stage 1 gave parts), and viewer.html (when there is a
+     structure; viewer_files/ beside it): the object in 3D with its joints and verdict (jax3dc.viewer).
+
+The models are plain text-in/text-out callables: pass ``generate_structure`` / ``generate_program``
+to stand in for a checkpoint (tests do; so can a caller with its own model server).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from PIL import Image
+from tqdm import tqdm
+
+from jax3dc.errors import InputFileError, Jax3dcError, StructureError
+from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.palette import object_palette
+from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
+from jax3dc.predict.models import TextModel, code_model, structure_candidates, structure_model
+from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
+from jax3dc.predict.report import ReportInputs, write_report
+from jax3dc.predict.segmentation import default_camera, render_segmentation
+from jax3dc.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_mesh, stage1_from_parts_dir,
+                                   stage1_from_program)
+from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
+from jax3dc.prompt import CODE_PROMPT, build_prompt
+from jax3dc.render import Camera, png_bytes
+from jax3dc.sampler import Sampler
+from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
+from jax3dc.structure.reply import json_text
+from jax3dc.verify.repair import repair
+from jax3dc.verify.select import Candidate, choose
+from jax3dc.verify.verdicts import Physics, VerdictCache
+
+MAX_SEG_SIDE = 1024  # px; S has the image's size and aspect, its longer side at most this
+PALETTE_CATEGORY = "image"  # palette seed: "image/<sha256 of the image>", the same image gets the same colours
+
+STEPS = ("stage 1", "segmentation", "structure model", "exports", "physics", "report")
+OutputListener = Callable[[str, Path], None]
+"""Called with (what, path) as each output is written (the CLI prints them)."""
+
+
+@dataclass
+class PredictResult:
+    """What a prediction produced; ``files`` maps an output's name to its path."""
+
+    out: Path
+    stage1: Stage1
+    camera: Camera
+    palette: np.ndarray  # this image's part colours (S and the legend)
+    prompt: str
+    files: dict[str, Path] = field(default_factory=dict)
+    raw_text: str | None = None
+    structure: Structure | None = None
+    verdict: dict | None = None
+
+
+def _image_and_digest(image: str | Path | Image.Image, max_pixels: int) -> tuple[Image.Image, str]:
+    if isinstance(image, Image.Image):
+        rgb = to_rgb(image)
+        return rgb, hashlib.sha256(png_bytes(np.asarray(rgb))).hexdigest()
+    path = Path(image)
+    rgb = to_rgb(load_image(path, max_pixels))
+    return rgb, hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def seg_size(image: Image.Image) -> tuple[int, int]:
+    """(width, height) of S: the image's, shrunk so the longer side is at most MAX_SEG_SIDE."""
+    shrink = min(1.0, MAX_SEG_SIDE / max(image.width, image.height))
+    return max(1, round(image.width * shrink)), max(1, round(image.height * shrink))
+
+
+class Checkpoints:
+    """Loads each checkpoint folder once: one model may have learned both tasks (issue 9), and a
+    4B model loaded twice would hold its weights twice."""
+
+    def __init__(self, dtype: str):
+        self.dtype = dtype
+        self.loaded: dict[Path, Sampler] = {}
+
+    def get(self, folder: str | Path) -> Sampler:
+        key = Path(folder).resolve()
+        if key not in self.loaded:
+            self.loaded[key] = Sampler.load(folder, self.dtype)
+        return self.loaded[key]
+
+
+def program_text(image_png: bytes, code_model_dir: str | Path | None, generate_program: TextModel | None,
+                 max_new_tokens: int, checkpoints: Checkpoints, constrained: bool = True) -> str:
+    """The code model's part program for image I (``image_png``; its prompt is jax3dc.prompt.CODE_PROMPT),
+    decoded under the part-program grammar unless ``constrained`` is off."""
+    if generate_program is None:
+        if code_model_dir is None:
+            raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
+        generate_program = code_model(checkpoints.get(code_model_dir), image_png, max_new_tokens, constrained)
+    return generate_program(CODE_PROMPT)
+
+
+class _Outputs:
+    """The files of one prediction: each is written, recorded under its name and announced to the
+    listener (the CLI prints them) as soon as it exists."""
+
+    def __init__(self, out: Path, on_output: OutputListener | None):
+        self.out = out
+        self.files: dict[str, Path] = {}
+        self.on_output = on_output
+
+    def wrote(self, name: str, path: Path) -> Path:
+        self.files[name] = path
+        if self.on_output is not None:
+            self.on_output(name, path)
+        return path
+
+    def text(self, name: str, filename: str, text: str) -> Path:
+        (self.out / filename).write_text(text, encoding="utf-8")
+        return self.wrote(name, self.out / filename)
+
+    def binary(self, name: str, filename: str, data: bytes) -> Path:
+        (self.out / filename).write_bytes(data)
+        return self.wrote(name, self.out / filename)
+
+
+class _Progress:
+    """A bar over STEPS on stderr (only on a terminal, and only when asked)."""
+
+    def __init__(self, enabled: bool):
+        self.bar = tqdm(total=len(STEPS), desc="predict", unit="step", leave=False,
+                        disable=None if enabled else True)  # None: only on a terminal
+
+    def step(self, name: str) -> None:
+        self.bar.set_postfix_str(name)
+        self.bar.n = STEPS.index(name)
+        self.bar.refresh()
+
+
+def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, check: VerdictCache,
+            outputs: _Outputs) -> tuple[str, Structure | None]:
+    """The candidate the physics verdict prefers, as text and, when it parses, as the canonical
+    structure ``choose`` made of it; candidates.json holds every one's row and the reason."""
+    candidates = [Candidate(text, logprob) for text, logprob in replies]
+    physics = check.physics
+    choice = choose(candidates, parts.keys(), parts, physics.scale, physics.mounted, boxes, check=check)
+    rows = [{"parsed": r.parsed, "rule": r.rule, "physics_ok": r.ok, "flagged_joints": r.flagged, "logprob": round(r.logprob, 4),
+             "text": c.text} for r, c in zip(choice.rows, candidates)]
+    doc = {"winner": choice.index, "reason": choice.reason, "candidates": rows}
+    outputs.text("candidates", "candidates.json", json.dumps(doc, indent=1) + "\n")
+    return candidates[choice.index].text, choice.structure
+
+
+def _repaired(structure: Structure, parts: dict, boxes: dict, check: VerdictCache, outputs: _Outputs) -> Structure:
+    """``structure`` with flagged hinges repaired where the verdict improves; repairs.json lists them."""
+    fixed = repair(structure, parts, check.physics.scale, check.physics.mounted, boxes, check=check)
+    outputs.text("repairs", "repairs.json", json.dumps([r.to_dict() for r in fixed.repairs], indent=1) + "\n")
+    return fixed.structure
+
+
+@dataclass(frozen=True)
+class _StructureSettings:
+    """predict's arguments for stage 2 (see predict)."""
+
+    model_dir: str | Path | None
+    generate: TextModel | None
+    max_new_tokens: int
+    constrained: bool
+    candidates: int
+    repair: bool
+    scale: float | None
+    mounted: bool
+
+
+def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, code_model_dir: str | Path | None,
+            generate_program: TextModel | None, max_new_tokens: int, constrained: bool, mesh_up: str,
+            checkpoints: Checkpoints, outputs: _Outputs, max_image_pixels: int) -> tuple[Image.Image, bytes, str, Stage1]:
+    """I (image.png) and the part meshes (parts/, program.txt for the code backend):
+    (I in RGB, its PNG bytes, the sha256 of the input, the parts)."""
+    rgb, digest = _image_and_digest(image, max_image_pixels)
+    image_png = png_bytes(np.asarray(rgb))  # I as the models saw it (RGB): the viewer shows it
+    target = outputs.out / "image.png"
+    if isinstance(image, (str, Path)) and Path(image).resolve() == target.resolve():
+        outputs.wrote("image", target)  # never written over the input itself
+    else:
+        outputs.binary("image", "image.png", image_png)
+    if backend == CODE:
+        program = program_text(image_png, code_model_dir, generate_program, max_new_tokens, checkpoints, constrained)
+        outputs.text("program", "program.txt", program)  # kept even when it fails to run
+        parts_in = stage1_from_program(program)
+    elif backend == MESH:
+        parts_in = stage1_from_mesh(source, mesh_up)
+    else:
+        parts_in = stage1_from_parts_dir(source)
+    return rgb, image_png, digest, parts_in
+
+
+def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict, settings: _StructureSettings,
+            checkpoints: Checkpoints, outputs: _Outputs, progress: _Progress) -> None:
+    """Structure model -> structure.json, exports and physics.json, filling ``result``; raises a
+    Jax3dcError at the first step that fails (the outputs before it stay). The winner of several
+    candidates is parsed once, and each structure's verdict computed once (one VerdictCache serves
+    the choice, the repair and physics.json)."""
+    progress.step("structure model")
+    parts_in = result.stage1
+    metres = settings.scale if settings.scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
+    check = VerdictCache(Physics(parts_in.parts, metres, settings.mounted))
+    generate = settings.generate
+    structure = None
+    if generate is None:
+        if settings.model_dir is None:
+            raise InputFileError("--structure-model", "a structure model checkpoint (--structure-model DIR) is needed")
+        sampler = checkpoints.get(settings.model_dir)
+        if settings.candidates > 1:
+            replies = structure_candidates(sampler, image_png, seg_png, settings.max_new_tokens, settings.candidates,
+                                           settings.constrained)(result.prompt)
+            result.raw_text, structure = _chosen(replies, parts_in.parts, boxes, check, outputs)
+        else:
+            generate = structure_model(sampler, image_png, seg_png, settings.max_new_tokens, settings.constrained)
+    if result.raw_text is None:
+        result.raw_text = generate(result.prompt)
+    if structure is None:
+        try:
+            parsed = parse_structure(json_text(result.raw_text), part_ids=parts_in.parts)
+        except StructureError as e:
+            raw = outputs.text("structure_raw", "structure_raw.txt", result.raw_text)
+            raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in {raw})") from None
+        structure = canonicalize(parsed, boxes)
+    progress.step("exports")
+    if settings.repair:
+        structure = _repaired(structure, parts_in.parts, boxes, check, outputs)
+    outputs.text("structure", "structure.json", to_json(structure))
+    result.structure = structure
+    named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
+                                      for pid, n in structure.nodes.items()})
+    for name, path in write_exports(named, parts_in.parts, outputs.out, metres, settings.mounted).items():
+        outputs.wrote(name, path)
+    progress.step("physics")
+    path, result.verdict = write_physics(check(structure).to_json(), outputs.out)
+    outputs.wrote("physics", path)
+
+
+def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
+            code_model_dir: str | Path | None = None, out: str | Path = "prediction", camera: Camera | None = None,
+            generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
+            scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
+            dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
+            mounted: bool = False, on_output: OutputListener | None = None, progress: bool = False,
+            max_image_pixels: int = MAX_IMAGE_PIXELS) -> PredictResult:
+    """Runs both stages on ``image`` and writes every output into ``out``.
+
+    ``stage1``: "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1). ``structure_model_dir`` / ``code_model_dir``: checkpoint
+    folders (``jax3dc.sampler.Sampler.load``); ``generate_structure`` (SPEC §3 prompt text ->
+    structure JSON text, seeing I and S) and ``generate_program`` (the code prompt -> part program
+    text, seeing I) replace them. ``camera``: the image's camera in the normalised frame (default:
+    a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
+    file's units per nu, assumed metres; 1.0 for the code backend, whose programs are in nu).
+    ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
+    ``constrained``: decode under the structure grammar and, for the code backend, the part-program
+    grammar (both always parse). ``candidates`` K > 1: K
+    answers from one decode (the first greedy), chosen by the physics verdict (candidates.json says
+    which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
+    (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
+    ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
+    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free (an
+    image gives no category to infer it from).
+    ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
+    ``max_image_pixels``: a larger image file is refused from its header, before decoding.
+    Raises a Jax3dcError subclass on bad input, after writing every output it could.
+    """
+    out = Path(out)
+    backend, source = parse_stage1(stage1)  # a bad --stage1 is refused before anything is written
+    out.mkdir(parents=True, exist_ok=True)
+    outputs = _Outputs(out, on_output)
+    checkpoints = Checkpoints(dtype)
+    steps = _Progress(progress)
+    settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
+                                  repair, scale, mounted)
+    try:
+        steps.step("stage 1")
+        rgb, image_png, digest, parts_in = _stage1(image, backend, source, code_model_dir, generate_program,
+                                                   max_new_tokens, constrained, mesh_up, checkpoints, outputs,
+                                                   max_image_pixels)
+        palette = object_palette(PALETTE_CATEGORY, digest)
+        boxes = part_boxes(parts_in.parts)
+        camera_given = camera is not None
+        camera = camera or default_camera(parts_in.parts)
+        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), outputs.files)
+        outputs.text("prompt", "prompt.txt", result.prompt)
+        save_parts(parts_in.parts, out / "parts")
+        outputs.wrote("parts", out / "parts")
+        steps.step("segmentation")
+        width, height = seg_size(rgb)
+        seg, _ids = render_segmentation(parts_in.parts, camera, palette, width, height=height)
+        seg_png = png_bytes(seg)
+        outputs.binary("seg", "seg.png", seg_png)
+
+        error: Jax3dcError | None = None
+        try:
+            _stage2(result, image_png, seg_png, boxes, settings, checkpoints, outputs, steps)
+        except Jax3dcError as e:
+            error = e
+        steps.step("report")
+        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), camera_given,
+                              result.structure, result.verdict, None if error is None else str(error))
+        for name, path in write_report(report, out).items():
+            outputs.wrote(name, path)
+        if "glb" in outputs.files:  # the viewer articulates the exported object: nothing to show without a structure
+            outputs.wrote("viewer", write_viewer_page(out, outputs.files["glb"], result.verdict, image_png, seg_png))
+    finally:
+        steps.bar.close()  # before the caller prints an error line
+    if error is not None:
+        raise error
+    return result

@@ -1,0 +1,83 @@
+"""Stage 1 (f_geo) at inference: one triangle mesh per part, in the normalised frame (SPEC §1).
+
+Backends:
+* ``code``: a part program (written by the code model from the image, or handed in) runs in the
+  interpreter (parsed, never exec-ed) into part meshes with semantic names (the program's materials
+  are not used: materials are stage 2's to predict, from the image);
+* ``mesh:FILE``: a part-segmented mesh from any tool (see :mod:`jax3dc.predict.mesh_input`);
+* ``parts:DIR``: ground-truth parts, a folder of ``<id>.obj`` (``.stl``, ``.ply``, ``.glb``) as
+  ``jax3dc.geometry.parts`` writes it (a dataset object's parts, or a previous prediction's
+  ``parts/``): stage 2 alone, for evaluation.
+
+Either way the parts are then centred with largest extent 1 (``normalise_parts``); the factor is
+kept as the scale (mesh: file units per nu, metres for a mesh in metres).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import trimesh
+
+from jax3dc.predict.mesh_input import load_segmented_mesh
+from jax3dc.errors import InputFileError, ProgramError
+from jax3dc.geometry.parts import load_parts, normalise_parts
+from jax3dc.program.interpreter import run_program
+
+CODE = "code"
+MESH = "mesh"
+PARTS = "parts"
+
+
+@dataclass(frozen=True)
+class Stage1:
+    """The parts of one image: meshes (nu), names by part id, and where they came from."""
+
+    parts: dict[int, trimesh.Trimesh]
+    names: dict[int, str]
+    scale: float  # source units per nu
+    source: str  # "code", or the mesh file's / parts folder's path
+    program: str | None = None
+
+
+def parse_stage1(spec: str) -> tuple[str, Path | None]:
+    """``code`` -> ("code", None); ``mesh:FILE`` -> ("mesh", FILE); ``parts:DIR`` -> ("parts", DIR);
+    anything else is an InputFileError."""
+    if spec == CODE:
+        return CODE, None
+    kind, _, path = spec.partition(":")
+    if kind in (MESH, PARTS) and path:
+        return kind, Path(path)
+    raise InputFileError(spec, "--stage1 must be `code`, `mesh:FILE` (a GLB with one node per part, or an OBJ "
+                               "with groups) or `parts:DIR` (a folder of <id>.obj part meshes)")
+
+
+def _normalised(parts: dict[int, trimesh.Trimesh], where: str) -> tuple[dict[int, trimesh.Trimesh], float]:
+    try:
+        return normalise_parts(parts)
+    except ValueError as e:
+        raise InputFileError(where, str(e)) from None
+
+
+def stage1_from_mesh(path: str | Path, up: str = "z") -> Stage1:
+    """Parts of a segmented mesh file whose up axis is ``up`` ("z", ours, or "y", glTF's)."""
+    parts, names = load_segmented_mesh(path, up=up)
+    normalised, scale = _normalised(parts, str(path))
+    return Stage1(normalised, names, scale, str(path))
+
+
+def stage1_from_parts_dir(directory: str | Path) -> Stage1:
+    """Parts of a parts folder (``load_parts``), re-normalised like every other backend's."""
+    normalised, scale = _normalised(load_parts(directory), str(directory))
+    return Stage1(normalised, {}, scale, str(directory))
+
+
+def stage1_from_program(text: str) -> Stage1:
+    """Runs a part program; a program that fails raises ProgramError naming the line."""
+    result = run_program(text)
+    try:
+        parts, scale = normalise_parts(result.parts)
+    except ValueError as e:
+        raise ProgramError(None, f"the program's parts have no normalised frame: {e}") from None
+    return Stage1(parts, dict(result.names), scale, CODE, text)

@@ -1,0 +1,31 @@
+"""verify_many: many objects in worker processes give what one process gives, in job order."""
+
+from eval.run_verify_pool import Job, verify_many
+from jax3dc.verify.select import Candidate
+from jax3dc.structure import to_json
+from tests.verify.verified_cases import IMPORTED, checked_object, pivot_moved_away
+from tests.shared_fixtures import partnet_object
+
+BOX = "storage_box/storage_box_000001/0"
+
+
+def test_workers_agree_with_one_process_and_repair_failing_winners(checked_records, imported_records):
+    box = checked_records[BOX]
+    broken = to_json(pivot_moved_away(checked_object(box).target, 2))
+    door = imported_records["Door/door_8877/0"]
+    jobs = [
+        Job(box, (Candidate(broken, -1.0), Candidate(box.target, -3.0))),
+        Job(box, (Candidate(broken, -1.0),)),  # nothing better to choose: the winner is repaired
+        Job(door, (Candidate(door.target, -2.0),), {IMPORTED[0]: partnet_object(IMPORTED[0])}),
+    ]
+    alone = verify_many(jobs, workers=1)
+    pooled = verify_many(jobs, workers=2)
+    assert [v.key for v in pooled] == [box.key, box.key, door.key]
+    summary = [(v.choice.index, v.choice.reason, [r.flagged for r in v.choice.rows], v.repaired and v.repaired.repairs)
+               for v in pooled]
+    assert summary == [(v.choice.index, v.choice.reason, [r.flagged for r in v.choice.rows],
+                        v.repaired and v.repaired.repairs) for v in alone]
+    first, lone, door_done = pooled
+    assert first.choice.index == 1 and first.repaired is None  # the winner passes: nothing to repair
+    assert not lone.choice.rows[0].ok and lone.repaired.after.ok and lone.repaired.repairs
+    assert door_done.choice.rows[0].ok and door_done.repaired is None
