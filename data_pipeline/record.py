@@ -39,8 +39,8 @@ class Record:
     prompt: str
     target: str
     program: str | None = None
-    parameters: str | None = None
     meta: dict[str, Any] = field(default_factory=dict)
+    parameters: str | None = None  # after meta: records built by position before it existed stay right
 
 
 def encode_record(record: Record) -> bytes:
