@@ -127,8 +127,8 @@ def travel_contacts(model: SimulationMJCF) -> frozenset[tuple[int, int]]:
     its limits (the others at rest), sampled so that no point moves more than ``MIN_PIECE_M``
     between samples: interlocking meshes at rest, and pieces that graze where the real parts slide
     past each other (hulls of voxel boxes, 32-vertex caps), would stop a joint short of the limits
-    the structure gives it. Only pairs within one object: in a scene, an object resting on another
-    (SPEC §2 ``support``) must keep colliding with it, or it would fall through."""
+    the structure gives it. Only pairs within one object: in a scene, a part that a joint swings
+    into another object (a lid opened into the table its box stands on) meets it, as in the world."""
     compiled = model.compile()
     data = mujoco.MjData(compiled)
     part_of = {mujoco.mj_name2id(compiled, mujoco.mjtObj.mjOBJ_BODY, p.label): p.part_id for p in model.parts}
