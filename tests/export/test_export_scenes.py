@@ -8,6 +8,7 @@ import ast
 import hashlib
 import io
 import json
+import subprocess
 
 import mujoco
 import numpy as np
@@ -16,6 +17,7 @@ import trimesh
 from pxr import Usd, UsdPhysics
 
 from export_cases import CASES, box
+from tests.blender_env import blender_python
 from jax3dc.export.assembly import label_of, objects
 from jax3dc.export.blender import blender_plan, export_blender
 from jax3dc.export.gltf import export_gltf
@@ -115,6 +117,29 @@ def test_blender_groups_each_object(tmp_path):
     calls = [n.value.func.id for n in ast.parse(script).body if isinstance(n, ast.Expr) and isinstance(n.value, ast.Call)]
     assert calls == ["build_scene"]
     assert "objects" not in blender_plan(*CASES["cabinet"](), SCALE)
+
+
+_BLENDER_GROUPS = """
+import json, sys
+import bpy
+exec(compile(open(sys.argv[1]).read(), sys.argv[1], "exec"))
+scene = bpy.data.collections["object"]
+print(json.dumps({"loose": len(scene.objects), "groups": {c.name: sorted(o.name for o in c.objects) for c in scene.children}}))
+"""
+
+
+def test_blender_puts_each_object_in_its_own_collection(tmp_path):
+    """Real Blender: every Blender object of a part (empty, joint empty, mesh) lands in its object's collection."""
+    script = export_blender(*table_box_and_lone_cube(), tmp_path, SCALE)
+    (tmp_path / "check.py").write_text(_BLENDER_GROUPS)
+    run = subprocess.run([blender_python(), str(tmp_path / "check.py"), str(script)], capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    found = json.loads(run.stdout.strip().splitlines()[-1])
+    assert found == {"loose": 0, "groups": {
+        "object_1": ["part_1", "part_1_mesh", "part_2", "part_2_mesh", "part_5", "part_5_mesh"],
+        "object_3": ["part_3", "part_3_mesh", "part_4", "part_4_joint", "part_4_mesh"],
+        "object_6": ["part_6", "part_6_mesh"]}}
 
 
 def test_objects_of_a_scene_keep_colliding_with_each_other(tmp_path):
