@@ -84,6 +84,23 @@ def tree_order(structure: Structure) -> list[int]:
     return order
 
 
+def objects(structure: Structure) -> dict[int, list[int]]:
+    """Each object's parts in tree order, keyed by its root (SPEC §2: one tree per object; a scene
+    has several roots and its scene root is implicit, so each exporter writes one of its own)."""
+    out: dict[int, list[int]] = {}
+    root_of: dict[int, int] = {}
+    for part_id in tree_order(structure):
+        parent = structure.nodes[part_id].parent
+        root_of[part_id] = part_id if parent is None else root_of[parent]
+        out.setdefault(root_of[part_id], []).append(part_id)
+    return out
+
+
+def object_label(root: int) -> str:
+    """Name of the node, prim, link or collection that holds one object of a scene."""
+    return f"object_{root}"
+
+
 def frames_nu(structure: Structure, order: list[int]) -> dict[int, np.ndarray]:
     """Frame origin of each part in the object frame (see the module docstring)."""
     frames: dict[int, np.ndarray] = {}

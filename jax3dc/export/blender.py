@@ -16,6 +16,11 @@ Relations: the mesh of part b reuses part a's mesh data (a linked duplicate) whe
 a's moved by a translation (``instance``) or reflected in the relation's plane (``symmetric``,
 giving the mesh object a mirroring transform) — same vertices and triangles, in any order, to
 1e-6 of the object size; otherwise (e.g. near-copies of different sizes) b keeps its own mesh. Every part records its relations in a custom property either way.
+
+A scene of several objects (several roots, SPEC §2): the plan lists them under ``objects`` and the
+script, after building, moves each object's Blender objects (part empties, joint empties, meshes)
+into a child collection ``object_<root>`` of the scene's collection, so each object can be
+selected, hidden or moved alone. A single object's script is the plain one.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ import trimesh
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from jax3dc.export.assembly import assemble, unit_axis
+from jax3dc.export.assembly import assemble, object_label, objects, unit_axis
 from jax3dc.export.files import write_files
 from jax3dc.export.gltf import relation_extras
 from jax3dc.materials import MATERIALS
@@ -154,8 +159,12 @@ def blender_plan(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
         plan_parts.append(entry)
     materials = {str(mid): {"family": m.family, "desc": m.desc, "rgba": list(MATERIALS[m.family].rgba)}
                  for mid, m in sorted(structure.materials.items())}
-    return {"name": model_name, "scale_m_per_nu": float(scale), "materials": materials,
+    plan = {"name": model_name, "scale_m_per_nu": float(scale), "materials": materials,
             "meshes": meshes, "parts": plan_parts}
+    trees = objects(structure)
+    if len(trees) > 1:
+        plan["objects"] = [{"name": object_label(root), "root": root, "parts": members} for root, members in trees.items()]
+    return plan
 
 
 _SCRIPT = '''\
@@ -250,17 +259,45 @@ def build():
         shown.material_slots[0].link = "OBJECT"
         shown.material_slots[0].material = materials[str(part["material"])]
         frames[part["label"]] = frame
+'''
+
+_BUILD = "\n\nbuild()\n"
+
+_BUILD_SCENE = '''
+
+def group_objects(collection, made):
+    """Each object of the scene into a child collection of its own (DATA["objects"])."""
+    object_of = dict((part, entry["name"]) for entry in DATA["objects"] for part in entry["parts"])
+    groups = {}
+    for entry in DATA["objects"]:
+        groups[entry["name"]] = bpy.data.collections.new(entry["name"])
+        groups[entry["name"]]["root_part_id"] = entry["root"]
+        collection.children.link(groups[entry["name"]])
+    for obj in made:
+        # a mesh hangs under its part's empty, a joint empty under the parent part's (the same object)
+        owner = obj if "part_id" in obj else obj.parent
+        groups[object_of[owner["part_id"]]].objects.link(obj)
+        collection.objects.unlink(obj)
 
 
-build()
+def build_scene():
+    objects_before = set(bpy.data.objects)
+    collections_before = set(bpy.context.scene.collection.children)
+    build()
+    collection = (set(bpy.context.scene.collection.children) - collections_before).pop()
+    group_objects(collection, set(bpy.data.objects) - objects_before)
+
+
+build_scene()
 '''
 
 
 def blender_script(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
                    model_name: str = "object") -> str:
     """The script text; the same input gives the same text."""
-    data = json.dumps(blender_plan(structure, parts, scale, model_name), sort_keys=True, separators=(",", ":"))
-    return _SCRIPT.format(data=repr(data))
+    plan = blender_plan(structure, parts, scale, model_name)
+    data = json.dumps(plan, sort_keys=True, separators=(",", ":"))
+    return _SCRIPT.format(data=repr(data)) + (_BUILD_SCENE if "objects" in plan else _BUILD)
 
 
 def export_blender(structure: Structure, parts: dict[int, trimesh.Trimesh], out_dir: str | Path, scale: float = 1.0, *,

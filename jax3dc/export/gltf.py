@@ -7,6 +7,11 @@ joint pivot for a jointed part; see ``assembly``) and its mesh is stored in that
 metres. Node extras: ``part_id``, ``name`` (the semantic name, verbatim: JSON escapes it),
 ``material`` (family, description), ``joint`` (type, unit axis, pivot in object-frame metres,
 range in rad or m) and the ``relations`` the part is in. Scene extras: the scale and all relations.
+
+A scene of several objects (several roots, SPEC §2) gets one top node ``scene`` (extras:
+``objects``, the root ids) with a node ``object_<root>`` per object (extras: ``object``, its root,
+and ``parts``, its part ids) holding that object's root part, so each object is one subtree an
+engine can move or hide alone. A single object keeps its root part as the top node.
 """
 
 from __future__ import annotations
@@ -17,11 +22,12 @@ import numpy as np
 import trimesh
 from trimesh.visual.material import PBRMaterial
 
-from jax3dc.export.assembly import ExportPart, assemble, unit_axis
+from jax3dc.export.assembly import ExportPart, assemble, object_label, objects, unit_axis
 from jax3dc.export.files import write_files
 from jax3dc.structure.schema import Relation, Structure
 
 WORLD = "world"
+SCENE_NODE = "scene"
 
 
 def relation_extras(relation: Relation) -> dict:
@@ -72,6 +78,7 @@ def gltf_scene(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
         "scale_m_per_nu": float(scale),
         "relations": [relation_extras(r) for r in structure.relations],
     }
+    top = _object_nodes(scene, objects(structure))
     for part in export:
         mesh = part.mesh.copy()
         mesh.visual = trimesh.visual.TextureVisuals(material=_material(part))
@@ -79,11 +86,23 @@ def gltf_scene(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
             mesh,
             geom_name=f"mesh_{part.part_id}",
             node_name=part.label,
-            parent_node_name=WORLD if part.parent is None else labels[part.parent],
+            parent_node_name=top[part.part_id] if part.parent is None else labels[part.parent],
             transform=trimesh.transformations.translation_matrix(part.offset_m),
             metadata=_node_extras(part, structure, scale),
         )
     return scene
+
+
+def _object_nodes(scene: trimesh.Scene, trees: dict[int, list[int]]) -> dict[int, str]:
+    """The node each root hangs from: the world for one object; for a scene, ``object_<root>``
+    nodes under one ``scene`` node (see the module docstring)."""
+    if len(trees) == 1:
+        return {root: WORLD for root in trees}
+    scene.graph.update(frame_from=WORLD, frame_to=SCENE_NODE, matrix=np.eye(4), metadata={"objects": list(trees)})
+    for root, members in trees.items():
+        scene.graph.update(frame_from=SCENE_NODE, frame_to=object_label(root), matrix=np.eye(4),
+                           metadata={"object": root, "parts": members})
+    return {root: object_label(root) for root in trees}
 
 
 def gltf_bytes(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0) -> bytes:

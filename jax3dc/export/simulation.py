@@ -64,7 +64,7 @@ class ModelOptions:
     visual: bool = True  # visual geoms (the checks need only collision)
     exclude: frozenset[tuple[int, int]] | None = None  # part pairs (a < b) never in contact; None: ``travel_contacts``
     floor: bool = False  # a plane under the lowest point of the rest pose
-    floor_contacts_only: bool = False  # parts touch the floor (one hull each) but not each other
+    floor_contacts_only: bool = False  # parts touch the floor (one hull each) and other objects, not their own object's
     frictionless: bool = False  # condim 1: only collisions block motion
     margin_m: float = 0.0  # contacts of moving parts are reported up to this distance apart
     # only these collision geom pairs (names) collide, through explicit frictionless pairs (requires
@@ -127,10 +127,12 @@ def travel_contacts(model: SimulationMJCF) -> frozenset[tuple[int, int]]:
     its limits (the others at rest), sampled so that no point moves more than ``MIN_PIECE_M``
     between samples: interlocking meshes at rest, and pieces that graze where the real parts slide
     past each other (hulls of voxel boxes, 32-vertex caps), would stop a joint short of the limits
-    the structure gives it."""
+    the structure gives it. Only pairs within one object: in a scene, a part that a joint swings
+    into another object (a lid opened into the table its box stands on) meets it, as in the world."""
     compiled = model.compile()
     data = mujoco.MjData(compiled)
     part_of = {mujoco.mj_name2id(compiled, mujoco.mjtObj.mjOBJ_BODY, p.label): p.part_id for p in model.parts}
+    root_of = _roots(model.parts)
     pairs: set[tuple[int, int]] = set()
 
     def touching(qpos: np.ndarray) -> None:
@@ -139,7 +141,7 @@ def travel_contacts(model: SimulationMJCF) -> frozenset[tuple[int, int]]:
         mujoco.mj_collision(compiled, data)
         for g1, g2 in zip(data.contact.geom1[:data.ncon], data.contact.geom2[:data.ncon]):
             a, b = part_of.get(int(compiled.geom_bodyid[g1])), part_of.get(int(compiled.geom_bodyid[g2]))
-            if a is not None and b is not None and a != b:
+            if a is not None and b is not None and a != b and root_of[a] == root_of[b]:
                 pairs.add((min(a, b), max(a, b)))
 
     touching(compiled.qpos0)
@@ -151,6 +153,28 @@ def travel_contacts(model: SimulationMJCF) -> frozenset[tuple[int, int]]:
             qpos[compiled.jnt_qposadr[j]] = value
             touching(qpos)
     return frozenset(pairs)
+
+
+def _roots(export: list[ExportPart]) -> dict[int, int]:
+    """Part id -> the root of its tree (its object, in a scene)."""
+    root_of: dict[int, int] = {}
+    for part in export:  # tree order: parents first
+        root_of[part.part_id] = part.part_id if part.parent is None else root_of[part.parent]
+    return root_of
+
+
+def _object_bits(export: list[ExportPart]) -> dict[int, dict[str, str]]:
+    """Contact bits of each part's collision pieces in a floor-contacts-only model of a scene: the
+    pieces of one object do not touch each other, those of different objects do (a box on a table
+    stands on it). Object k owns bit k + 2 (bits 0 and 1 are the floor's); past 30 objects the bits
+    repeat, so objects sharing one do not touch."""
+    roots = sorted({p.part_id for p in export if p.parent is None})
+    if len(roots) < 2:
+        return {}
+    bit = {root: 1 << (2 + k % 30) for k, root in enumerate(roots)}
+    every = sum(set(bit.values()))
+    root_of = _roots(export)
+    return {pid: {"contype": str(bit[r]), "conaffinity": str(every & ~bit[r])} for pid, r in root_of.items()}
 
 
 def _reach(model: mujoco.MjModel, data: mujoco.MjData, j: int) -> float:
@@ -219,6 +243,7 @@ def _mjcf(export: list[ExportPart], pieces: dict[int, list[np.ndarray]], scale: 
     contact_bits = {"condim": "1"} if options.frictionless else {}
     if options.floor_contacts_only or options.contact_pairs is not None:  # pieces collide through the floor hulls or the pairs alone
         contact_bits.update(contype="0", conaffinity="0")
+    scene_bits = _object_bits(export) if options.floor_contacts_only else {}
     bodies: dict[int, ET.Element] = {}
     moving: dict[int, bool] = {}  # the part moves with some joint (only those need the proximity margin)
     for part in export:
@@ -243,7 +268,7 @@ def _mjcf(export: list[ExportPart], pieces: dict[int, list[np.ndarray]], scale: 
             mesh_name = f"hull_{part.part_id}_{k}"
             ET.SubElement(asset, "mesh", name=mesh_name, vertex=vec(vertices.ravel()))
             ET.SubElement(body, "geom", name=f"collision_{part.part_id}_{k}", type="mesh", mesh=mesh_name,
-                          friction=friction, group="3", **margin, **contact_bits)
+                          friction=friction, group="3", **margin, **{**contact_bits, **scene_bits.get(part.part_id, {})})
         if options.floor_contacts_only and pieces[part.part_id]:  # (contype & other's conaffinity): hull-hull 2&1 = 0, hull-floor 2&2
             ET.SubElement(asset, "mesh", name=f"floor_hull_{part.part_id}", vertex=vec(_hull_vertices(pieces[part.part_id]).ravel()))
             ET.SubElement(body, "geom", name=f"floor_contact_{part.part_id}", type="mesh", mesh=f"floor_hull_{part.part_id}",

@@ -51,7 +51,9 @@ def urdf_model(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: f
                       rgba=vec(MATERIALS[material.family].rgba))
     labels = {part.part_id: part.label for part in export}
     roots = [part for part in export if part.parent is None]
-    if len(roots) > 1:
+    if len(roots) > 1:  # a URDF has one root link: the scene's, implicit in the structure (SPEC §2)
+        robot.append(ET.Comment(f" a scene of {len(roots)} objects: {SCENE_ROOT} holds each object's root link "
+                                f"({', '.join(p.label for p in roots)}) by a fixed joint fix_<root id> "))
         _add_inertial(ET.SubElement(robot, "link", name=SCENE_ROOT), np.zeros(3), 0.0, np.zeros((3, 3)))
     files: dict[str, bytes] = {}
     for part in export:

@@ -21,6 +21,11 @@ Bodies below another body reset the transform stack and carry their world transl
 PhysX drops a rigid body nested in another one without that reset. Roots carry the articulation
 root; physics materials (friction) bind to the colliders with the ``physics`` purpose. The
 structure's part ids, names, materials and relations go into ``customData["jax3dc"]``.
+
+A scene of several objects (several roots, SPEC §2) holds each object under its own Xform
+``object_<root>`` (``customData["jax3dc"]``: ``object``, its root, and ``parts``, its part ids)
+beneath the default prim, so each object is one subtree; a single object's root part sits
+directly under the default prim.
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdPhysics, UsdShade, Vt
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.transform import Rotation
 
-from jax3dc.export.assembly import ExportPart, assemble, unit_axis
+from jax3dc.export.assembly import ExportPart, assemble, object_label, objects, unit_axis
 from jax3dc.export.files import write_files
 from jax3dc.export.gltf import relation_extras
 from jax3dc.export.simulation import MIN_PIECE_M
@@ -169,6 +174,19 @@ def _part_data(part: ExportPart, structure: Structure) -> dict:
     return data
 
 
+def _object_prims(stage: Usd.Stage, root: Sdf.Path, trees: dict[int, list[int]]) -> dict[int, Sdf.Path]:
+    """The prim each root part goes under: the default prim for one object; for a scene, an
+    ``object_<root>`` Xform per object (see the module docstring)."""
+    if len(trees) == 1:
+        return {r: root for r in trees}
+    out = {}
+    for r, members in trees.items():
+        holder = UsdGeom.Xform.Define(stage, root.AppendChild(object_label(r)))
+        holder.GetPrim().SetCustomDataByKey("jax3dc", {"object": r, "parts": Vt.IntArray(members)})
+        out[r] = holder.GetPath()
+    return out
+
+
 def usd_stage(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0, *,
               model_name: str = "object") -> Usd.Stage:
     """The export as an in-memory stage (see the module docstring for its layout)."""
@@ -184,10 +202,11 @@ def usd_stage(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: fl
         "relations": {f"relation_{i}": relation_extras(r) for i, r in enumerate(structure.relations)},
     })
     materials = _physics_materials(stage, root.GetPath(), structure)
+    top = _object_prims(stage, root.GetPath(), objects(structure))
     paths: dict[int, Sdf.Path] = {}
     for part in export:
         parent = paths[part.parent] if part.parent is not None else None
-        path = (root.GetPath() if parent is None else parent).AppendChild(part.label)
+        path = (top[part.part_id] if parent is None else parent).AppendChild(part.label)
         paths[part.part_id] = path
         body = UsdGeom.Xform.Define(stage, path)
         if parent is not None:

@@ -127,7 +127,9 @@ def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: floa
     """Object-level "gravity" (shown "unstable under gravity ...") and per-joint "sag" findings on a
     floor, joints held (not for full-turn hinges: a wheel or dial turned is still a pose the object has).
 
-    Parts touch only the floor here: the object's own contacts are the kinematic checks' concern.
+    Parts touch only the floor here, and in a scene the other objects' parts (an object may rest on
+    another, SPEC §2 ``support``): an object's own contacts are the kinematic checks' concern. A
+    scene's findings name the root of the object that does not stand.
     A ``mounted`` object (a faucet on its sink, a toilet bolted down) keeps its root fixed: only
     the held joints are tested.
     """
@@ -144,7 +146,8 @@ def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: floa
         drift = float(np.linalg.norm(final[adr:adr + 3] - rest[adr:adr + 3])) / scale
         tilt = _tilt(final[adr + 3:adr + 7])
         if not np.isfinite(drift) or drift > GRAVITY_DRIFT_NU or tilt > GRAVITY_TILT_RAD:
-            found.append(Finding("gravity", depth=drift, tilt=tilt))
+            root = (int(model.joint(j).name.removeprefix("free_")),) if len(structure.roots()) > 1 else ()
+            found.append(Finding("gravity", parts=root, depth=drift, tilt=tilt))
     for k, part in enumerate(sim.joint_parts):
         if _full_turn(sim, k):  # every angle is a pose of the object (a wheel rolled by settling: C 0.196 rad, MJX 0.201)
             continue

@@ -42,7 +42,7 @@ CHECKS = {
     "relation motion": "a related part moves otherwise (depth: how far apart once mapped)",
     "limit": "the servo stops short of a limit (limit: lo|hi, reachable: where it stops)",
     "sag": "gravity moves a held joint (depth: by how much, rad or nu)",
-    "gravity": "object-level: the object does not stand under gravity (depth: root drift, tilt: rad)",
+    "gravity": "object-level: the object (in a scene, the one whose root is parts[0]) does not stand under gravity (depth: root drift, tilt: rad)",
     "combination": "object-level: parts interpenetrate when several joints move at once",
 }
 
@@ -153,7 +153,8 @@ def describe(finding: Finding) -> str:
         return f"limit unreachable: {f.limit} (stops at q={f.reachable:.3f})"
     if f.check == "sag":
         return f"sags under gravity by {f.depth:.3f}"
-    return f"unstable under gravity: root moved {f.depth:.3f} nu, tilted {f.tilt:.2f} rad"
+    which = f"the object of root part {f.parts[0]}" if f.parts else "root"
+    return f"unstable under gravity: {which} moved {f.depth:.3f} nu, tilted {f.tilt:.2f} rad"
 
 
 OBJECT_CHECKS = {"rest": "rest", "combination": "combinations", "gravity": "gravity"}  # check -> key of "checks"

@@ -33,7 +33,7 @@ class SimOptions:
     visual: bool = False
     exclude: frozenset[tuple[int, int]] = frozenset()  # part pairs (a < b) never in contact
     frictionless: bool = False  # condim 1: only collisions block motion (reachability)
-    floor_contacts_only: bool = False  # parts touch the floor (one hull each) but not each other (gravity test)
+    floor_contacts_only: bool = False  # parts touch the floor (one hull each) and other objects of a scene, not their own object (gravity test)
     margin_m: float = 0.0  # contacts of moving parts are reported up to this distance apart (proximity)
     # only these collision geom pairs (names) collide, through explicit frictionless pairs (requires
     # ``frictionless``): MJX compiles one collision function per distinct mesh pair it may test

@@ -21,7 +21,7 @@ JSON_CHUNK = 0x4E4F534A  # "JSON" little-endian
 class ViewerModel:
     """The object as the page lists it; lengths as in the GLB (metres), angles in radians."""
 
-    parts: list[dict[str, Any]]  # {"id", "label", "name", "parent", "material", "joint"} in file order
+    parts: list[dict[str, Any]]  # {"id", "label", "name", "parent", "material", "joint", "object"} in file order
     relations: list[dict[str, Any]]
     scale_m_per_nu: float
 
@@ -37,6 +37,18 @@ def glb_json(glb: bytes, where: str) -> dict[str, Any]:
         return json.loads(glb[20:20 + length].decode("utf-8"))
     except (UnicodeDecodeError, ValueError) as e:
         raise InputFileError(where, f"GLB JSON chunk is not JSON: {e}") from None
+
+
+def _mark_objects(parts: list[dict[str, Any]]) -> None:
+    """Each part's ``object``: the id of its tree's root (SPEC §2: one tree per object), so the page
+    can list a scene's objects apart."""
+    parent = {p["id"]: p["parent"] for p in parts}
+    for p in parts:
+        root, seen = p["id"], set()
+        while parent.get(root) is not None and root not in seen:  # a parent outside the file ends the walk
+            seen.add(root)
+            root = parent[root]
+        p["object"] = root
 
 
 def viewer_model(glb: bytes, where: str) -> ViewerModel:
@@ -63,6 +75,7 @@ def viewer_model(glb: bytes, where: str) -> ViewerModel:
         })
     if not parts:
         raise InputFileError(where, "no node carries a part_id extra: not a glTF written by jax3dc export")
+    _mark_objects(parts)
     scene = (doc.get("scenes") or [{}])[doc.get("scene", 0)]
     meta = (scene.get("extras") or {}).get("jax3dc") or {}
     return ViewerModel(parts, list(meta.get("relations", [])), float(meta.get("scale_m_per_nu", 1.0)))

@@ -55,7 +55,10 @@ def _joint_frame(bodies: dict, body: Sdf.Path, position, orientation) -> tuple[n
 
 def _body_path(structure: Structure, pid: int) -> Sdf.Path:
     node = structure.nodes[pid]
-    parent = Sdf.Path("/object") if node.parent is None else _body_path(structure, node.parent)
+    top = Sdf.Path("/object")
+    if len(structure.roots()) > 1:  # a scene: each object under its own Xform
+        top = top.AppendChild(f"object_{pid}")
+    parent = top if node.parent is None else _body_path(structure, node.parent)
     return parent.AppendChild(label_of(pid, node.name))
 
 
@@ -188,7 +191,7 @@ def test_partnet_mobility_objects_read_back_as_their_structure(tmp_path, name):
 def test_articulations_start_at_each_root_fixed_to_the_world(tmp_path):
     structure, parts = CASES["two_roots"]()
     found = _parsed(Usd.Stage.Open(str(export_usd(structure, parts, tmp_path, SCALE))))
-    roots = {Sdf.Path("/object/part_1"): 3, Sdf.Path("/object/part_3"): 2}  # root -> bodies in its tree
+    roots = {Sdf.Path("/object/object_1/part_1"): 3, Sdf.Path("/object/object_3/part_3"): 2}  # root -> bodies in its tree
     articulations = found[KIND.Articulation]
     assert {tuple(a.rootPrims) for a in articulations.values()} == {(root,) for root in roots}
     for art in articulations.values():

@@ -12,6 +12,7 @@
   const FLAG_COLOUR = 0xdd2222;
   const AXIS_COLOURS = { hinge: 0xff8800, slide: 0x0077ff };
   const STEPS = 500;  // slider positions across a joint's range
+  const OBJECT_COLOURS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf"];  // a scene's objects in the part list
 
   function el(tag, attrs, ...children) {
     const e = document.createElement(tag);
@@ -229,16 +230,36 @@
     if (checks.childElementCount) box.append(checks);
   }
 
-  function fillParts() {
+  function partRow(p) {
+    const colour = (meshes.get(p.id) || [])[0];
+    const swatch = el("span", { class: "swatch" });
+    if (colour) swatch.style.background = "#" + colour.material.color.getHexString();
+    const how = p.parent === null ? "root" : p.joint ? `${p.joint.type} on part ${p.parent}` : `rigid on part ${p.parent}`;
+    const li = el("li", { "data-part": String(p.id) }, swatch, `${partText(p)} · ${how}`);
+    hoverPart(li, [p.id]);
+    return li;
+  }
+
+  function fillParts() {  // a scene (several trees, SPEC §2): one group per object, hovering it lights the object
     const list = document.getElementById("parts");
+    const objects = new Map();
     for (const p of data.parts) {
-      const colour = (meshes.get(p.id) || [])[0];
-      const swatch = el("span", { class: "swatch" });
-      if (colour) swatch.style.background = "#" + colour.material.color.getHexString();
-      const how = p.parent === null ? "root" : p.joint ? `${p.joint.type} on part ${p.parent}` : `rigid on part ${p.parent}`;
-      const li = el("li", { "data-part": String(p.id) }, swatch, `${partText(p)} · ${how}`);
-      hoverPart(li, [p.id]);
-      list.append(li);
+      if (!objects.has(p.object)) objects.set(p.object, []);
+      objects.get(p.object).push(p);
+    }
+    if (objects.size === 1) {
+      for (const p of data.parts) list.append(partRow(p));
+      return;
+    }
+    let k = 0;
+    for (const [root, members] of objects) {
+      const heading = el("div", { class: "object-heading" }, `object ${root} · ${members.length} part${members.length > 1 ? "s" : ""}`);
+      hoverPart(heading, members.map((p) => p.id));
+      const inner = el("ul", {});
+      for (const p of members) inner.append(partRow(p));
+      const group = el("li", { class: "object", "data-object": String(root) }, heading, inner);
+      group.style.borderLeftColor = OBJECT_COLOURS[k++ % OBJECT_COLOURS.length];
+      list.append(group);
     }
   }
 
