@@ -215,17 +215,22 @@ class Sampler:
         out = decode(self.model, prefilled, config, jax.random.key(options.seed), greedy, constraint)
         tokens, lengths, logprobs = np.asarray(out.tokens), np.asarray(out.lengths), np.asarray(out.logprobs)
 
-        def sample(i: int) -> Sample:
+        def sample(i: int, boxes: dict | None) -> Sample:
             n = int(lengths[i])
             stopped = bool(n) and int(tokens[i, n - 1]) in special.stop_ids
             text, reply = self.tokenizer.decode(tokens[i, :n].tolist()), self.tokenizer.decode(tokens[i, :n - stopped].tolist())
-            prompt = rows[i // k]
-            if prompt.task == "structure":
-                boxes = legend_boxes(prompt.record.prompt)
+            if boxes is not None:
                 text, reply = (text_to_absolute(t, boxes, self.pivot_frame) for t in (text, reply))
             return Sample(text, n, stopped, float(logprobs[i]), reply)
 
-        return [[sample(r * k + c) for c in range(k)] for r in range(len(prompts))]
+        def pivot_boxes(prompt: Prompt) -> dict | None:
+            """The legend boxes box-frame pivots are read against, parsed once for the prompt's K rows."""
+            if prompt.task != "structure" or self.pivot_frame.name == "absolute":
+                return None
+            return legend_boxes(prompt.record.prompt)
+
+        return [[sample(r * k + c, boxes) for c in range(k)]
+                for r, boxes in ((r, pivot_boxes(rows[r])) for r in range(len(prompts)))]
 
 
 @dataclass
