@@ -8,13 +8,15 @@ through ``jax3dc.grounding.ground_text`` — the function the sampler applies wh
 grounding on — against the legend boxes of the record's own prompt, and the result is scored per set
 as ``bench.real_objects`` scores it (records without a prediction yet are left out and counted).
 Writes OUT/summary.json, OUT/summary.md and, per variant, OUT/<variant>.jsonl (predictions in the
-format ``jax3dc eval run --predictions`` reads).
+format ``jax3dc eval run --predictions`` reads; the file name is the variant's, e.g.
+``default_ground_joints.jsonl``).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import re
 from dataclasses import replace
 from pathlib import Path
 from typing import Iterable
@@ -29,19 +31,28 @@ COLUMNS = ("parse", "type_acc", "axis_acc", "pos_err", "success", "hinge_edge_ac
 
 
 def variants(prior: JointPrior) -> dict[str, Grounding | None]:
-    """The raw predictions, grounding with every step, with each step left out, and each step alone;
-    then the two decision constants of the prior varied."""
-    full = Grounding(prior=prior)
-    out: dict[str, Grounding | None] = {"raw": None, "grounded": full}
-    for step in ("axis_snap", "type_axis", "line_snap"):
-        out[f"without {step}"] = replace(full, **{step: False})
-    out["axis_snap only"] = replace(full, type_axis=False, line_snap=False)
-    out["type_axis only"] = replace(full, axis_snap=False, line_snap=False)
+    """The raw predictions; ``Grounding()`` (what ``--ground-joints`` runs); it with the hinge-line snap
+    added, with the axis direction free, and with both (every step); each step alone; then the two
+    decision constants of the prior varied."""
+    default = Grounding(prior=prior)
+    out: dict[str, Grounding | None] = {"raw": None, "default (--ground-joints)": default}
+    out["+ line_snap"] = replace(default, line_snap=True)
+    out["+ axis direction free"] = replace(default, axis_dim_kept=False)
+    out["every step"] = replace(default, line_snap=True, axis_dim_kept=False)
+    out["axis_snap only"] = replace(default, type_axis=False)
+    out["type only"] = replace(default, axis_snap=False)
+    out["line_snap only"] = replace(default, type_axis=False, axis_snap=False, line_snap=True)
     for ratio in (1.0, 2.0, 16.0):
-        out[f"keep_ratio {ratio:g}"] = Grounding(prior=replace(prior, keep_ratio=ratio))
+        out[f"keep_ratio {ratio:g}"] = replace(default, prior=replace(prior, keep_ratio=ratio))
     for sigma in (0.025, 0.1, 1e3):
-        out[f"line_sigma {sigma:g}"] = Grounding(prior=replace(prior, line_sigma=sigma))
+        out[f"+ line_snap, line_sigma {sigma:g}"] = replace(default, line_snap=True,
+                                                             prior=replace(prior, line_sigma=sigma))
     return out
+
+
+def slug(variant: str) -> str:
+    """A variant's name as a file name: ``default (--ground-joints)`` -> ``default_ground_joints``."""
+    return re.sub(r"[^a-z0-9.]+", "_", variant.lower()).strip("_")
 
 
 def main(argv: Iterable[str] | None = None) -> dict:
@@ -65,7 +76,7 @@ def main(argv: Iterable[str] | None = None) -> dict:
     for variant, grounding in variants(prior).items():
         preds = {k: raw[k] if grounding is None else ground_text(raw[k], legend_boxes(prompts[k]), grounding)
                  for k in prompts}
-        with (out / f"{variant.replace(' ', '_')}.jsonl").open("w", encoding="utf-8") as f:
+        with (out / f"{slug(variant)}.jsonl").open("w", encoding="utf-8") as f:
             for key, text in preds.items():
                 f.write(json.dumps({"key": key, "text": text}, separators=(",", ":")) + "\n")
         for name, rs in records.items():

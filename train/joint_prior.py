@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Iterable
+from pathlib import Path
 
 import numpy as np
 from scipy.optimize import minimize
@@ -116,6 +117,16 @@ def cross_validate(x, y, objects, lines, distances, line_objects, class_lam: flo
             "line_upper_bound": float((distances.min(1) <= ORIGIN_TOLERANCE).mean())}
 
 
+def sources(data: list[str]) -> str:
+    """The --data sources in a line: folders as given, shard files counted per folder."""
+    files: dict[str, int] = {}
+    for source in data:
+        path = Path(source)
+        key = f"{path.parent}/" if path.is_file() else source
+        files[key] = files.get(key, 0) + path.is_file()
+    return ", ".join(f"{k} ({n} shards)" if n else k for k, n in files.items())
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--data", nargs="+", required=True, help="training shards (or folders of them)")
@@ -135,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
           + ", ".join(f"{k} {v:.3f}" for k, v in cv.items()))
     mean, scale, w = fit_classes(x, y, a.class_l2)
     note = (f"fitted by `python3 -m train.joint_prior` on {len(y)} joints of {len(np.unique(objects))} objects of "
-            f"{', '.join(a.data)} (split {a.split}); 5-fold by object: "
+            f"{sources(a.data)} (split {a.split}); 5-fold by object: "
             + ", ".join(f"{k} {v:.3f}" for k, v in cv.items()))
     JointPrior(mean, scale, w, fit_lines(lines, distances, a.line_l2), a.keep_ratio, a.line_sigma, note).save(a.out)
     print(f"wrote {a.out}")

@@ -1,27 +1,29 @@
 """Joint grounding: the joints a model writes, corrected by the geometry of the parts at decode time.
 
 A small model trained mostly on procedural objects reads a real drawer as a hinge, tilts an axis,
-or puts a door's hinge on the wrong line of its frame. The part boxes of the prompt's legend say a
-good deal about each of these, and three steps use them, each switchable (``Grounding``):
+or puts a door's hinge on the wrong line of its frame. The part boxes of the prompt's legend say
+something about each of these, and three steps use them, each switchable (``Grounding``):
 
 1. ``axis_snap``: an axis within ``AXIS_SNAP`` of a box direction becomes exactly that direction
-   (sign kept) — real hinges and slides run along their part's box far more often than not.
+   (sign kept).
 2. ``type_axis``: the prior's classifier (``jax3dc.grounding.prior``) scores hinge/slide along
    x/y/z from the boxes; the model's own choice is kept unless another is ``keep_ratio`` times
-   likelier. A part that becomes a slide opens out of the face of its parent it sits nearest, by
-   ``SLIDE_OPENING`` of its depth; one that becomes a hinge opens by a quarter turn.
-3. ``line_snap``: a box-aligned hinge's pivot moves to the best of the nine lines of its part's box
-   along the axis (edges, face centre lines, centre line), scored by the prior's line scorer plus
-   a Gaussian of the distance to the model's own line (width ``line_sigma``), so the model's guess
-   decides between lines the geometry finds alike; a written line farther than ``line_sigma`` from
-   all nine (a hinge off its part's box, at the parent's edge) is kept as written. When the hinge moves to another line (or is
-   new), its range is turned so that opening moves the part away from its parent's centre.
+   likelier. With ``axis_dim_kept`` (the default) only the type may change, along the direction
+   the model wrote: letting the classifier move axes cost axis accuracy everywhere. A part that
+   becomes a slide opens out of the face of its parent it sits nearest, by ``SLIDE_OPENING`` of
+   its side; one that becomes a hinge opens by a quarter turn, away from its parent.
+3. ``line_snap`` (off by default): a box-aligned hinge's pivot moves to the best of the nine lines
+   of its part's box along the axis (edges, face centre lines, centre line), scored by the prior's
+   line scorer plus a Gaussian of the distance to the model's own line (width ``line_sigma``); a
+   written line farther than ``line_sigma`` from all nine (a hinge at the parent's edge, off its
+   part's box) is kept. When a hinge moves to another line, or is new, its range is turned so
+   that opening moves the part away from its parent's centre.
 
-Grounding never changes parents, materials or relations, and turns a valid structure into a valid
-one (``ground_text`` leaves a text that does not parse against the prompt's part ids as it is,
-for the validator to judge).
+What each step bought on the release-3 benchmark is in docs/runs/grounding_20261128. Grounding
+never changes parents, materials or relations, and turns a valid structure into a valid one
+(``ground_text`` leaves a text that does not parse against the prompt's part ids as it is, for
+the validator to judge).
 """
-
 from __future__ import annotations
 
 import json
@@ -50,7 +52,8 @@ class Grounding:
 
     axis_snap: bool = True
     type_axis: bool = True
-    line_snap: bool = True
+    axis_dim_kept: bool = True
+    line_snap: bool = False  # off by default: it cost procedural splits 6 points and bought nothing on real objects
     prior: JointPrior | None = None
 
     def resolved_prior(self) -> JointPrior:
@@ -78,10 +81,12 @@ def _outward(joint: Joint, child: Box, parent: Box | None) -> Joint:
     return replace(joint, range=(-hi, -lo))
 
 
-def _choose_class(joint: Joint, k: int, features: np.ndarray, prior: JointPrior) -> tuple[str, int]:
+def _choose_class(joint: Joint, k: int, features: np.ndarray, prior: JointPrior, dim_kept: bool) -> tuple[str, int]:
     logp = prior.class_logprobs(features)
     written = CLASSES.index((joint.type, k))
     logp[written] += math.log(prior.keep_ratio)
+    if dim_kept:
+        logp[[i for i, (_, d) in enumerate(CLASSES) if d != k]] = -np.inf
     return CLASSES[int(np.argmax(logp))]
 
 
@@ -118,16 +123,16 @@ def ground_joint(joint: Joint, child: Box, parent: Box | None, handles: Sequence
     new = replace(joint, axis=tuple(float(v) for v in axis))
     retyped = False
     if grounding.type_axis:
-        kind, dim = _choose_class(joint, k, joint_features(child, parent, handles), prior)
+        kind, dim = _choose_class(joint, k, joint_features(child, parent, handles), prior, grounding.axis_dim_kept)
         if (kind, dim) != (joint.type, k):
             retyped = True
             c = np.asarray(child.centroid, float)
             if kind == "slide":
                 out = 1.0 if parent is None else float(np.sign(round(c[dim] - parent.centroid[dim], 6)) or 1.0)
                 travel = min(MAX_SLIDE, max(0.02, SLIDE_OPENING * float(child.extent[dim])))
-                new = Joint("slide", tuple(_unit(dim, out)), tuple(float(v) for v in c), (0.0, travel))
+                new = Joint("slide", tuple(float(v) for v in _unit(dim, out)), tuple(float(v) for v in c), (0.0, travel))
             else:
-                new = Joint("hinge", tuple(_unit(dim)), tuple(float(v) for v in c), (0.0, HINGE_OPENING))
+                new = Joint("hinge", tuple(float(v) for v in _unit(dim)), tuple(float(v) for v in c), (0.0, HINGE_OPENING))
             k, aligned = dim, True
     if grounding.line_snap and new.type == "hinge" and aligned and (grounding.axis_snap or retyped):
         pivot = _best_line(new, k, child, parent, handles, prior, trust_written=not retyped)

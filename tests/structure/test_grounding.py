@@ -45,7 +45,7 @@ def test_tilted_axis_near_a_box_direction_is_snapped_and_a_far_one_kept():
 
 
 def test_hinge_written_near_an_edge_lands_on_it():
-    g = Grounding(type_axis=False, prior=flat_prior())
+    g = Grounding(type_axis=False, line_snap=True, prior=flat_prior())
     written = Joint("hinge", (0.0, 0.0, 1.0), (-0.37, -0.33, 0.2), (0.0, 1.5))
     out = ground_joint(written, DOOR, CABINET, [HANDLE], g)
     np.testing.assert_allclose(out.pivot, (-0.4, -0.32, 0.0), atol=1e-9)  # the left front edge, at the door's mid height
@@ -53,30 +53,31 @@ def test_hinge_written_near_an_edge_lands_on_it():
 
 
 def test_hinge_written_off_every_box_line_is_kept():
-    g = Grounding(type_axis=False, prior=flat_prior())
+    g = Grounding(type_axis=False, line_snap=True, prior=flat_prior())
     written = Joint("hinge", (0.0, 0.0, 1.0), (-0.7, -0.5, 0.0), (0.0, 1.5))  # far outside the door's box
     assert ground_joint(written, DOOR, CABINET, [], g).pivot == written.pivot
 
 
 def test_the_prior_overrules_the_written_class_only_when_keep_ratio_allows():
     hinge = Joint("hinge", (0.0, 0.0, 1.0), (-0.4, -0.31, 0.0), (0.0, 1.5))
-    sure = Grounding(prior=flat_prior(("slide", 1), keep_ratio=4.0))
+    sure = Grounding(axis_dim_kept=False, prior=flat_prior(("slide", 1), keep_ratio=4.0))
     out = ground_joint(hinge, DOOR, CABINET, [], sure)
     assert out.type == "slide" and out.axis == (0.0, -1.0, 0.0)  # out of the cabinet's front face (-Y)
     assert 0.0 < out.range[1] <= 0.6 and out.range[0] == 0.0
-    stubborn = Grounding(prior=flat_prior(("slide", 1), keep_ratio=1e6))
+    stubborn = Grounding(axis_dim_kept=False, prior=flat_prior(("slide", 1), keep_ratio=1e6))
     assert ground_joint(hinge, DOOR, CABINET, [], stubborn).type == "hinge"
 
 
 def test_a_slide_turned_into_a_hinge_gets_a_line_of_its_box_and_a_hinge_range():
     slide = Joint("slide", (0.0, 1.0, 0.0), (0.0, -0.31, 0.0), (0.0, 0.3))
-    out = ground_joint(slide, DOOR, CABINET, [HANDLE], Grounding(prior=flat_prior(("hinge", 2))))
+    free = Grounding(axis_dim_kept=False, line_snap=True, prior=flat_prior(("hinge", 2)))
+    out = ground_joint(slide, DOOR, CABINET, [HANDLE], free)
     assert out.type == "hinge" and out.axis == (0.0, 0.0, 1.0)
     assert abs(out.range[1] - out.range[0] - math.pi / 2) < 1e-9
     # it opens outward: positive angles of the range it spans move the door away from the cabinet's centre
     swing = np.cross(out.axis, np.subtract(DOOR.centroid, out.pivot))
     assert (swing @ np.subtract(DOOR.centroid, CABINET.centroid)) * (out.range[0] + out.range[1]) > 0
-    assert validate(to_json(ground_structure(structure(slide), BOXES, Grounding(prior=flat_prior(("hinge", 2)))))) == []
+    assert validate(to_json(ground_structure(structure(slide), BOXES, free))) == []
 
 
 @pytest.mark.parametrize("child", [Box((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)), Box((0.1, 0.2, 0.3), (0.5, 0.0, 0.0))])
@@ -84,7 +85,8 @@ def test_degenerate_boxes_give_finite_features_and_a_valid_joint(child):
     assert np.all(np.isfinite(joint_features(child, Box((0, 0, 0), (0, 0, 0)))))
     assert np.all(np.isfinite(line_features(child, None, 2)))
     joint = Joint("hinge", (0.0, 1.0, 0.0), (0.0, 0.0, 0.0), (-1.0, 1.0))
-    grounded = ground_structure(structure(joint), {1: Box((0, 0, 0), (0, 0, 0)), 2: child, 3: child}, Grounding())
+    every_step = Grounding(axis_dim_kept=False, line_snap=True)
+    grounded = ground_structure(structure(joint), {1: Box((0, 0, 0), (0, 0, 0)), 2: child, 3: child}, every_step)
     assert validate(to_json(grounded), part_ids=[1, 2, 3]) == []
 
 
@@ -103,7 +105,7 @@ def test_ground_text_leaves_what_does_not_validate_and_keeps_what_surrounds_the_
     assert ground_text(wrong_ids, BOXES, Grounding()) == wrong_ids
     joint = Joint("hinge", (0.0, 0.0, 1.0), (-0.37, -0.30, 0.2), (0.0, 1.5))
     text = "```json\n" + to_json(structure(joint)) + "\n```<|im_end|>"
-    out = ground_text(text, BOXES, Grounding(type_axis=False, prior=flat_prior()))
+    out = ground_text(text, BOXES, Grounding(type_axis=False, line_snap=True, prior=flat_prior()))
     assert out.startswith("```json\n{") and out.endswith("}\n```<|im_end|>")
     assert parse_structure(out[out.find("{"):out.rfind("}") + 1]).nodes[2].joint.pivot == (-0.4, -0.3, 0.0)
 
@@ -127,7 +129,8 @@ def test_grounding_never_makes_a_valid_structure_invalid():
             nodes[i] = Node(int(rng.integers(1, i)), 0, joint)
         text = to_json(Structure({0: Material("Metal")}, nodes))
         assert validate(text, part_ids=boxes) == []
-        for g in (Grounding(prior=prior), Grounding(prior=replace(prior, keep_ratio=1.0, line_sigma=1e3))):
+        for g in (Grounding(prior=prior), Grounding(axis_dim_kept=False, line_snap=True,
+                                                    prior=replace(prior, keep_ratio=1.0, line_sigma=1e3))):
             out = ground_text(text, boxes, g)
             assert validate(out, part_ids=boxes) == [], out
             grounded = parse_structure(out)
@@ -146,3 +149,11 @@ def test_prior_files_load_and_a_bad_one_is_named(tmp_path):
     path.write_text(json.dumps(doc))
     with pytest.raises(InputFileError, match="prior.json.*line_weights"):
         JointPrior.load(path)
+
+
+def test_with_the_axis_dimension_kept_only_the_type_changes():
+    hinge = Joint("hinge", (0.0, 0.0, 1.0), (-0.4, -0.31, 0.0), (0.0, 1.5))
+    likes_y_slides = flat_prior(("slide", 1))
+    assert ground_joint(hinge, DOOR, CABINET, [], Grounding(prior=likes_y_slides, axis_dim_kept=True)).type == "hinge"
+    out = ground_joint(hinge, DOOR, CABINET, [], Grounding(prior=flat_prior(("slide", 2)), axis_dim_kept=True))
+    assert out.type == "slide" and out.axis == (0.0, 0.0, 1.0)  # level with the cabinet's centre: +z by convention
