@@ -41,7 +41,7 @@ def variants(prior: JointPrior) -> dict[str, Grounding | None]:
     out["every step"] = replace(default, line_snap=True, axis_dim_kept=False)
     out["axis_snap only"] = replace(default, type_axis=False)
     out["type only"] = replace(default, axis_snap=False)
-    out["line_snap only"] = replace(default, type_axis=False, axis_snap=False, line_snap=True)
+    out["axis_snap + line_snap"] = replace(default, type_axis=False, line_snap=True)
     for ratio in (1.0, 2.0, 16.0):
         out[f"keep_ratio {ratio:g}"] = replace(default, prior=replace(prior, keep_ratio=ratio))
     for sigma in (0.025, 0.1, 1e3):

@@ -48,7 +48,8 @@ HINGE_OPENING = math.pi / 2
 
 @dataclass(frozen=True)
 class Grounding:
-    """Which grounding steps run (module docstring), and with which prior (None: the shipped one)."""
+    """Which grounding steps run (module docstring; ``line_snap`` acts on snapped or new axes only),
+    and with which prior (None: the shipped one)."""
 
     axis_snap: bool = True
     type_axis: bool = True
@@ -134,6 +135,7 @@ def ground_joint(joint: Joint, child: Box, parent: Box | None, handles: Sequence
             else:
                 new = Joint("hinge", tuple(float(v) for v in _unit(dim)), tuple(float(v) for v in c), (0.0, HINGE_OPENING))
             k, aligned = dim, True
+    # the nine lines run along a box direction: the axis must be one (snapped, or new)
     if grounding.line_snap and new.type == "hinge" and aligned and (grounding.axis_snap or retyped):
         pivot = _best_line(new, k, child, parent, handles, prior, trust_written=not retyped)
         i, j = cross_dims(k)
