@@ -36,6 +36,7 @@ from tqdm import tqdm
 from jax3dc.constrained import parameters_constraint, program_constraint, structure_constraint
 from jax3dc.errors import InputFileError
 from jax3dc.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
+from jax3dc.grounding import Grounding, ground_text
 from jax3dc.model.params import load_pretrained
 from jax3dc.processing.chat import encode_chat
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images, smart_resize
@@ -89,6 +90,8 @@ class DecodeOptions:
     # The parameters task's grammar is built from the factories' schemas (category -> Schema), which
     # live above the core: the caller passes them (data_pipeline.factories.registry.SCHEMAS).
     schemas: Any = None
+    # Joints corrected by the legend boxes after decoding (jax3dc.grounding); None: as the model wrote them.
+    grounding: Grounding | None = None
 
     def __post_init__(self):
         if self.candidates < 1:
@@ -221,11 +224,14 @@ class Sampler:
             text, reply = self.tokenizer.decode(tokens[i, :n].tolist()), self.tokenizer.decode(tokens[i, :n - stopped].tolist())
             if boxes is not None:
                 text, reply = (text_to_absolute(t, boxes, self.pivot_frame) for t in (text, reply))
+                if options.grounding is not None:
+                    text, reply = (ground_text(t, boxes, options.grounding) for t in (text, reply))
             return Sample(text, n, stopped, float(logprobs[i]), reply)
 
         def pivot_boxes(prompt: Prompt) -> dict | None:
-            """The legend boxes box-frame pivots are read against, parsed once for the prompt's K rows."""
-            if prompt.task != "structure" or self.pivot_frame.name == "absolute":
+            """The legend boxes box-frame pivots are read against and joints are grounded in, parsed
+            once for the prompt's K rows."""
+            if prompt.task != "structure" or (self.pivot_frame.name == "absolute" and options.grounding is None):
                 return None
             return legend_boxes(prompt.record.prompt)
 

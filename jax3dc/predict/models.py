@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+from jax3dc.grounding import Grounding
 from jax3dc.sampler import DecodeOptions, Sampler
 
 TextModel = Callable[[str], str]
@@ -39,17 +40,20 @@ def generate_texts(sampler: Sampler, example: ImageExample, task: str, max_new_t
 
 
 def structure_model(sampler: Sampler, image_png: bytes, seg_png: bytes, max_new_tokens: int,
-                    constrained: bool = True) -> TextModel:
+                    constrained: bool = True, grounding: Grounding | None = None) -> TextModel:
     """Stage 2 (f_str): reads (I, S, prompt) and writes the structure JSON (greedy; under the
-    structure grammar of the prompt unless ``constrained`` is off)."""
+    structure grammar of the prompt unless ``constrained`` is off; joints grounded in the legend's
+    boxes with ``grounding``)."""
+    options = DecodeOptions(constrained=constrained, grounding=grounding)
     return lambda prompt: generate_texts(sampler, ImageExample(image_png, seg_png, prompt), "structure",
-                                         max_new_tokens, DecodeOptions(constrained=constrained))[0][0]
+                                         max_new_tokens, options)[0][0]
 
 
 def structure_candidates(sampler: Sampler, image_png: bytes, seg_png: bytes, max_new_tokens: int,
-                         candidates: int, constrained: bool = True) -> Callable[[str], list[tuple[str, float]]]:
+                         candidates: int, constrained: bool = True,
+                         grounding: Grounding | None = None) -> Callable[[str], list[tuple[str, float]]]:
     """Stage 2 with ``candidates`` answers per prompt (text, log-likelihood), the first greedy."""
-    options = DecodeOptions(constrained=constrained, candidates=candidates)
+    options = DecodeOptions(constrained=constrained, candidates=candidates, grounding=grounding)
     return lambda prompt: generate_texts(sampler, ImageExample(image_png, seg_png, prompt), "structure",
                                          max_new_tokens, options)
 

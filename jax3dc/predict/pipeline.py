@@ -32,6 +32,7 @@ from tqdm import tqdm
 
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.grounding import Grounding
 from jax3dc.palette import object_palette
 from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.predict.models import TextModel, code_model, structure_candidates, structure_model
@@ -184,6 +185,7 @@ class _StructureSettings:
     repair: bool
     scale: float | None
     mounted: bool
+    grounding: Grounding | None = None
 
 
 def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, code_model_dir: str | Path | None,
@@ -227,10 +229,11 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
         sampler = checkpoints.get(settings.model_dir)
         if settings.candidates > 1:
             replies = structure_candidates(sampler, image_png, seg_png, settings.max_new_tokens, settings.candidates,
-                                           settings.constrained)(result.prompt)
+                                           settings.constrained, settings.grounding)(result.prompt)
             result.raw_text, structure = _chosen(replies, parts_in.parts, boxes, check, outputs)
         else:
-            generate = structure_model(sampler, image_png, seg_png, settings.max_new_tokens, settings.constrained)
+            generate = structure_model(sampler, image_png, seg_png, settings.max_new_tokens, settings.constrained,
+                                       settings.grounding)
     if result.raw_text is None:
         result.raw_text = generate(result.prompt)
     if structure is None:
@@ -260,7 +263,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
             dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
             mounted: bool = False, on_output: OutputListener | None = None, progress: bool = False,
-            max_image_pixels: int = MAX_IMAGE_PIXELS) -> PredictResult:
+            max_image_pixels: int = MAX_IMAGE_PIXELS, ground_joints: bool = False) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
     ``stage1``: "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1). ``structure_model_dir`` / ``code_model_dir``: checkpoint
@@ -279,6 +282,8 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     root instead of standing it on a floor, and object.xml keeps its base fixed instead of free (an
     image gives no category to infer it from).
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
+    ``ground_joints``: correct the decoded joints with the part boxes (jax3dc.grounding; a structure
+    model folder, not a ``generate_structure``).
     ``max_image_pixels``: a larger image file is refused from its header, before decoding.
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
@@ -289,7 +294,7 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     checkpoints = Checkpoints(dtype)
     steps = _Progress(progress)
     settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
-                                  repair, scale, mounted)
+                                  repair, scale, mounted, Grounding() if ground_joints else None)
     try:
         steps.step("stage 1")
         rgb, image_png, digest, parts_in = _stage1(image, backend, source, code_model_dir, generate_program,

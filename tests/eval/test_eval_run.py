@@ -136,8 +136,11 @@ def test_bad_inputs_are_one_line_errors(shards: Path, tmp_path: Path, capsys) ->
                  str(tmp_path / "p.jsonl"), "--out", str(tmp_path / "o")]) == 1  # two sources
     assert main(["eval", "run", "--data", str(shards), "--split", "val", "--reference-as-prediction",
                  "--out", str(tmp_path / "o")]) == 1
+    assert main(["eval", "run", "--data", str(shards), "--reference-as-prediction", "--ground-joints",
+                 "--out", str(tmp_path / "o")]) == 1  # grounding acts as a checkpoint decodes
     err = capsys.readouterr().err
     assert "nowhere" in err and "at most one of" in err and "no records of split 'val'" in err
+    assert "--ground-joints grounds structures as a checkpoint decodes them" in err
 
 
 def test_split_all_scores_every_record_of_every_dataset(shards: Path, tmp_path: Path) -> None:
