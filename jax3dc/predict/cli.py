@@ -28,7 +28,7 @@ extent 1 (the normalised frame). The segmentation S is rendered from the image's
 and writes the structure.
 
 Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF: the
-model the physics check judges, its root free unless --mounted),
+model the physics check judges, its root free unless mounted),
 object.usda, object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
 with a slider per joint; open it again with `jax3dc view DIR`) (and parameters.txt and program.txt
 for the parameters backend, program.txt for the code backend, structure_raw.txt when the model's
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
                      mounted=args.mounted, on_output=show, progress=True, max_image_pixels=args.max_image_pixels)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
-    held = " with its root held (--mounted)" if args.mounted else ""
+    held = " with its root held (mounted)" if result.mounted else ""
     print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check{held} {verdict} (see physics.json)")
     return 0
 
@@ -104,11 +104,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--repair", action="store_true",
                    help="move the pivot of each hinge the physics check flags to where child and parent meet, "
                    "kept only when the verdict improves; repairs.json lists them")
-    p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=False,
+    p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=None,
                    help="the object is fixed in place in use (a faucet, a toilet, a door or window frame): the "
                         "physics check holds its root instead of standing it free on a floor, the candidates "
                         "and repairs are judged so, and object.xml keeps its base fixed (without it, its root "
-                        "is free, as in the check; default: not mounted; an image names no category)")
+                        "is free, as in the check; default: mounted when --stage1 parameters names such a "
+                        "category (faucet, toilet, door, window), else not)")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
                    help="model compute dtype (float32 on CPU is slower but exact)")
     p.add_argument("--max-image-pixels", type=positive_int, default=MAX_IMAGE_PIXELS, metavar="N",

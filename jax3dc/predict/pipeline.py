@@ -36,6 +36,7 @@ from tqdm import tqdm
 
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
+from jax3dc.mounted import is_mounted
 from jax3dc.palette import object_palette
 from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.predict.image_check import check_object_image
@@ -77,6 +78,7 @@ class PredictResult:
     raw_text: str | None = None
     structure: Structure | None = None
     verdict: dict | None = None
+    mounted: bool = False  # whether the physics check held the root and object.xml keeps its base fixed
 
 
 def _image_and_digest(image: str | Path | Image.Image, max_pixels: int) -> tuple[Image.Image, str]:
@@ -213,7 +215,7 @@ class _StructureSettings:
     candidates: int
     repair: bool
     scale: float | None
-    mounted: bool
+    mounted: bool | None  # None: decided by the category stage 1 names (jax3dc.mounted)
 
 
 def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, models: _Stage1Models, mesh_up: str,
@@ -299,7 +301,7 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
             stage1_model_dir: str | Path | None = None, read_parameters: Reader | None = None,
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
             dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
-            mounted: bool = False, on_output: OutputListener | None = None, progress: bool = False,
+            mounted: bool | None = None, on_output: OutputListener | None = None, progress: bool = False,
             max_image_pixels: int = MAX_IMAGE_PIXELS) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
@@ -320,8 +322,9 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
     which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
     (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
     ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
-    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free (an
-    image gives no category to infer it from).
+    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free.
+    None: mounted when stage 1 names a category fixed in place in use (the parameters backend's
+    factory: ``jax3dc.mounted``), else not (the other backends name no category).
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
     ``max_image_pixels``: a larger image file is refused from its header, before decoding.
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
@@ -341,10 +344,13 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
         rgb, image_png, digest, parts_in = _stage1(image, backend, source, models, mesh_up, checkpoints, outputs,
                                                    max_image_pixels)
         palette = object_palette(PALETTE_CATEGORY, digest)
+        if settings.mounted is None:
+            settings = replace(settings, mounted=is_mounted(parts_in.category))
         boxes = part_boxes(parts_in.parts)
         camera_given = camera is not None
         camera = camera or default_camera(parts_in.parts)
-        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), outputs.files)
+        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), outputs.files,
+                               mounted=settings.mounted)
         outputs.text("prompt", "prompt.txt", result.prompt)
         save_parts(parts_in.parts, out / "parts")
         outputs.wrote("parts", out / "parts")

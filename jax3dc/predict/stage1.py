@@ -48,6 +48,7 @@ class Stage1:
     scale: float  # source units per nu
     source: str  # "parameters", "code", or the mesh file's / parts folder's path
     program: str | None = None
+    category: str | None = None  # the factory's, for the parameters backend (it decides whether the object is mounted)
 
 
 def parse_stage1(spec: str | None, stage1_model: str | Path | None = None) -> tuple[str, Path | None]:
@@ -107,4 +108,4 @@ def stage1_from_parameters(text: str) -> Stage1:
     from jax3dc.parameters import parse_parameters
 
     obj = run_parameters(parse_parameters(text, SCHEMAS))
-    return Stage1(obj.parts, dict(obj.names), obj.scale_m_per_nu, PARAMETERS, obj.program_text)
+    return Stage1(obj.parts, dict(obj.names), obj.scale_m_per_nu, PARAMETERS, obj.program_text, obj.category)

@@ -178,3 +178,16 @@ def test_another_reader_plugs_in_by_its_marker(image, tmp_path, monkeypatch):
     assert result.stage1.program == run_parameters(parse_parameters(GOOD, SCHEMAS)).program_text
     with pytest.raises(InputFileError, match="stage1_net.json .*config.json"):
         stage1_readers.load_reader(tmp_path, None)  # holds neither marker
+
+
+def test_a_category_fixed_in_place_is_mounted_unless_told(image, tmp_path):
+    """A faucet from stage 1 is checked with its root held and exported with its base fixed; an
+    explicit choice wins, and a category that stands free stays free."""
+    faucet = format_parameters(sample_parameters("faucet", 0), SCHEMAS["faucet"])
+    runs = {"default": (faucet, None), "told": (faucet, False), "stapler": (GOOD, None)}
+    mounted = {name: predict(image, "parameters", out=tmp_path / name, read_parameters=lambda rgb, t=text: t,
+                             camera=CAMERA, generate_structure=rigid_star, mounted=flag).mounted
+               for name, (text, flag) in runs.items()}
+    assert mounted == {"default": True, "told": False, "stapler": False}
+    assert "<freejoint" not in (tmp_path / "default" / "object.xml").read_text()
+    assert "<freejoint" in (tmp_path / "told" / "object.xml").read_text()
