@@ -97,7 +97,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "jax3dc exports write; the default) or y (glTF's convention, +Y up, front +Z, e.g. Blender's "
                         "glTF exporter)")
     p.add_argument("--unconstrained", action="store_true",
-                   help="decode the structure without its grammar (default: the output always parses)")
+                   help="decode without the grammars: the structure's, and stage 1's part-program or parameter "
+                        "grammar (default: every output parses)")
     p.add_argument("--candidates", type=positive_int, default=1, metavar="K",
                    help="K structures from one decode (the first greedy, the rest sampled); the physics verdict "
                    "chooses, candidates.json says which and why (default 1)")
