@@ -1,5 +1,5 @@
-"""`jax3dc predict IMAGE --out DIR [--stage1 parameters|code|mesh:FILE|parts:DIR] [--stage1-model DIR] [--code-model DIR]
-[--structure-model DIR]`."""
+"""`jax3dc predict IMAGE --out DIR [--stage1 parameters|code|mesh:FILE|parts:DIR] [--stage1-model DIR]
+[--code-model DIR] [--structure-model DIR]`."""
 
 from __future__ import annotations
 

@@ -7,8 +7,8 @@ leaves every output made before it (and the report says what failed):
   2. stage 1: part meshes (a stage-1 model -> factory parameters -> the factory, code model -> part
      program -> interpreter, a segmented mesh file, or a parts folder) -> parts/ (+ parameters.txt
      and program.txt for the parameters backend, program.txt for the code backend) and the
-     stage-2 prompt -> prompt.txt; the
-     backends that read the image first refuse one with no object in it (jax3dc.predict.image_check);
+     stage-2 prompt -> prompt.txt; the backends that read the image first refuse one with no
+     object in it (jax3dc.predict.image_check);
   3. S rendered from the image's camera -> seg.png;
   4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
      canonical); invalid output -> structure_raw.txt and a StructureError;
@@ -193,10 +193,9 @@ def _repaired(structure: Structure, parts: dict, boxes: dict, check: VerdictCach
 
 
 @dataclass(frozen=True)
-class _Stage1Models:
+class _Stage1Settings:
     """predict's arguments for the stage-1 backends that read the image (see predict)."""
 
-    model_dir: Path | None  # parameters: the stage-1 model folder
     code_model_dir: str | Path | None
     generate_program: TextModel | None
     read_parameters: Reader | None
@@ -218,7 +217,7 @@ class _StructureSettings:
     mounted: bool | None  # None: decided by the category stage 1 names (jax3dc.mounted)
 
 
-def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, models: _Stage1Models, mesh_up: str,
+def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, given: _Stage1Settings, mesh_up: str,
             checkpoints: Checkpoints, outputs: _Outputs, max_image_pixels: int) -> tuple[Image.Image, bytes, str, Stage1]:
     """I (image.png) and the part meshes (parts/; parameters.txt and program.txt for the parameters
     backend, program.txt for the code backend): (I in RGB, its PNG bytes, the sha256 of the input, the parts)."""
@@ -233,14 +232,14 @@ def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, 
     if backend in (PARAMETERS, CODE):
         check_object_image(pixels, str(image) if isinstance(image, (str, Path)) else "the input image")
     if backend == PARAMETERS:
-        text = parameters_text(pixels, source, models.read_parameters, models.max_new_tokens, checkpoints,
-                               models.constrained)
+        text = parameters_text(pixels, source, given.read_parameters, given.max_new_tokens, checkpoints,
+                               given.constrained)
         outputs.text("parameters", "parameters.txt", text)  # kept even when it fails to run
         parts_in = stage1_from_parameters(text)
         outputs.text("program", "program.txt", parts_in.program)
     elif backend == CODE:
-        program = program_text(image_png, models.code_model_dir, models.generate_program, models.max_new_tokens,
-                                checkpoints, models.constrained)
+        program = program_text(image_png, given.code_model_dir, given.generate_program, given.max_new_tokens,
+                                checkpoints, given.constrained)
         outputs.text("program", "program.txt", program)  # kept even when it fails to run
         parts_in = stage1_from_program(program)
     elif backend == MESH:
@@ -311,10 +310,10 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
     ``stage1_model_dir``: the parameters backend's model folder (jax3dc.predict.stage1_readers; default:
     the shipped one). ``generate_structure`` (SPEC §3 prompt text -> structure JSON text, seeing I
     and S), ``generate_program`` (the code prompt -> part program text, seeing I) and
-    ``read_parameters`` (I as RGB uint8 -> parameter text) replace them. ``camera``: the image's camera in the normalised frame (default:
-    a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
-    file's units per nu, assumed metres; the factory's for the parameters backend; 1.0 for the code
-    backend, whose programs are in nu).
+    ``read_parameters`` (I as RGB uint8 -> parameter text) replace them. ``camera``: the image's
+    camera in the normalised frame (default: a front view fitting the object). ``scale``: metres
+    per nu for the exports (default: the mesh file's units per nu, assumed metres; the factory's for
+    the parameters backend; 1.0 for the code backend, whose programs are in nu).
     ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
     ``constrained``: decode under the structure grammar and, for the parameters and code backends,
     the parameter or part-program grammar (all always parse). ``candidates`` K > 1: K
@@ -335,14 +334,13 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
     outputs = _Outputs(out, on_output)
     checkpoints = Checkpoints(dtype)
     steps = _Progress(progress)
-    models = _Stage1Models(source if backend == PARAMETERS else None, code_model_dir, generate_program,
-                           read_parameters, max_new_tokens, constrained)
+    stage1_settings = _Stage1Settings(code_model_dir, generate_program, read_parameters, max_new_tokens, constrained)
     settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
                                   repair, scale, mounted)
     try:
         steps.step("stage 1")
-        rgb, image_png, digest, parts_in = _stage1(image, backend, source, models, mesh_up, checkpoints, outputs,
-                                                   max_image_pixels)
+        rgb, image_png, digest, parts_in = _stage1(image, backend, source, stage1_settings, mesh_up, checkpoints,
+                                                   outputs, max_image_pixels)
         palette = object_palette(PALETTE_CATEGORY, digest)
         if settings.mounted is None:
             settings = replace(settings, mounted=is_mounted(parts_in.category))
