@@ -32,9 +32,9 @@ os.environ["JAX3DC_PIECE_CACHE"] = ""
 
 from PIL import Image  # noqa: E402
 
+from jax3dc.factories import generate_object  # noqa: E402
+from jax3dc.factories.registry import FACTORIES  # noqa: E402
 import jax3dc.geometry.convex_pieces as cp  # noqa: E402
-from data_pipeline.factories import generate_object  # noqa: E402
-from data_pipeline.factories.registry import FACTORIES  # noqa: E402
 from jax3dc.predict import predict  # noqa: E402
 from jax3dc.cli import main as cli  # noqa: E402
 from jax3dc.geometry.parts import part_boxes, save_parts  # noqa: E402

@@ -39,7 +39,7 @@ def main() -> None:
     import jax
     import jax.numpy as jnp
 
-    from data_pipeline.factories import generate_object
+    from jax3dc.factories import generate_object
     from jax3dc.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
     from jax3dc.physics.sim_model import SimOptions, build_sim_model
     from jax3dc.physics.tolerances import PENETRATION_TOL_NU

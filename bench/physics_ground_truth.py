@@ -91,7 +91,7 @@ def main() -> None:
 
     from tqdm import tqdm
 
-    from data_pipeline.factories import FACTORIES
+    from jax3dc.factories import FACTORIES
     from eval.verdict_accuracy.ground_truth import factory_objects, imported_objects
 
     categories = [c for c in args.categories.split(",") if c] or sorted(FACTORIES)

@@ -38,7 +38,7 @@ def main() -> None:
 
     import jax
 
-    from data_pipeline.factories import generate_object
+    from jax3dc.factories import generate_object
     from jax3dc.physics import cpu_backend
     from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
     from jax3dc.physics.mjx_dynamics import mjx_final_qpos

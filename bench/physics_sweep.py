@@ -34,7 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywher
 
 
 def _record(index: int):
-    from data_pipeline.factories import FACTORIES, generate_object
+    from jax3dc.factories import FACTORIES, generate_object
     from data_pipeline.record import Record
     from jax3dc.structure import to_json
 

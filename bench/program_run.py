@@ -22,7 +22,7 @@ import argparse  # noqa: E402
 import hashlib  # noqa: E402
 import time  # noqa: E402
 
-from data_pipeline.factories import FACTORIES, generate_object  # noqa: E402
+from jax3dc.factories import FACTORIES, generate_object  # noqa: E402
 from jax3dc.program import run_program  # noqa: E402
 
 

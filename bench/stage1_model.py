@@ -58,7 +58,7 @@ def _eval_structure(model: Path, data: Path, out: Path, limit: int, batch: int) 
 
 
 def main() -> None:
-    from data_pipeline.factories.registry import SCHEMAS
+    from jax3dc.factories.registry import SCHEMAS
     from jax3dc.constrained.parameters import longest_text
 
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from data_pipeline.factories import FACTORIES, generate_object
 from data_pipeline.samples import split_of
+from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.processing.bpe import chat_segments, config_for_tokenizer, train_bpe
 from jax3dc.processing.chat import render_chat

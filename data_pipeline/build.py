@@ -64,7 +64,7 @@ SPLIT_CHOICES = ("hash", "train", "val", "test")
 def factory_sources(n: int, seed: int) -> list[SourceSpec]:
     """``n`` factory objects cycling through the categories; object k of the build has seed
     ``seed * 1_000_000 + k``, so two builds with different seeds share no object."""
-    from data_pipeline.factories import FACTORIES, object_id
+    from jax3dc.factories import FACTORIES, object_id
 
     categories = list(FACTORIES)
     out = []

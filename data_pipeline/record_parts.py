@@ -20,11 +20,11 @@ import trimesh
 
 from data_pipeline.augment import merge_parts, split_part
 from data_pipeline.build import SourceSpec, load_sources
-from data_pipeline.factories import FACTORIES, object_id as factory_object_id
 from data_pipeline.record import Record
 from data_pipeline.samples import SourceObject, derived_rng
 from data_pipeline.views import move_joint
 from jax3dc.errors import Jax3dcError
+from jax3dc.factories import FACTORIES, object_id as factory_object_id
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.mounted import is_mounted
 from jax3dc.structure import boxes_from_dict

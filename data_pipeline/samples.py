@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from data_pipeline.factories import generate_object
-from data_pipeline.factories.registry import SCHEMAS
 from data_pipeline.record import Record
 from data_pipeline.views import sample_view_pose
+from jax3dc.factories import generate_object
+from jax3dc.factories.registry import SCHEMAS
 from jax3dc.render import (APPEARANCES, PartRenderer, paint_segmentation, part_rgba, png_bytes, sample_appearance,
                            sample_camera, sample_lighting, sample_view_lighting, vary_camera)
 from jax3dc.geometry.parts import part_boxes

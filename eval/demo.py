@@ -30,7 +30,6 @@ import mujoco
 
 from data_pipeline import tokenizer_cli
 from data_pipeline.build import BuildConfig, factory_sources, run_build
-from data_pipeline.factories import generate_object
 from data_pipeline.shards import shard_paths
 from eval import cli as eval_cli
 from eval.records import read_records
@@ -39,6 +38,7 @@ from jax3dc.export.blender import export_blender
 from jax3dc.export.gltf import export_gltf
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import export_urdf
+from jax3dc.factories import generate_object
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.predict.pipeline import predict
 from jax3dc.predict.segmentation import camera_from_dict

@@ -31,7 +31,7 @@ def run_parameters_task(args: argparse.Namespace, records: list, out: Path) -> i
     """Texts from the checkpoint (or --predictions, or the records' own), run and scored."""
     from tqdm import tqdm
 
-    from data_pipeline.factories.registry import SCHEMAS, run_parameters
+    from jax3dc.factories.registry import SCHEMAS, run_parameters
     from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
     from eval.metrics.cases import load_predictions
     from eval.metrics.parameters import score_parameters, summarise

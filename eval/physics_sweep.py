@@ -60,7 +60,7 @@ def record_scale(meta: dict[str, Any]) -> float:
 def run_sweep(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from data_pipeline.factories import FACTORIES
+    from jax3dc.factories import FACTORIES
     from data_pipeline.shards import read_dataset
     from eval.physics_report import write_report
 

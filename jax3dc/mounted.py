@@ -3,7 +3,7 @@
 A faucet on its sink, a toilet bolted to the floor, a door frame and a window frame set in a wall,
 a light switch on its wall plate need not stand free: the physics checks hold their root in the
 gravity test and the MJCF export keeps their base fixed even when asked for a free one. The names
-are factory categories (``data_pipeline.factories``) and PartNet-Mobility's ("Door", "Switch"),
+are factory categories (``jax3dc.factories``) and PartNet-Mobility's ("Door", "Switch"),
 matched without case.
 """
 

@@ -87,8 +87,8 @@ class DecodeOptions:
     temperature: float = 0.8  # for the sampled candidates
     top_p: float = 0.95
     seed: int = 0
-    # The parameters task's grammar is built from the factories' schemas (category -> Schema), which
-    # live above the core: the caller passes them (data_pipeline.factories.registry.SCHEMAS).
+    # The parameters task's grammar is built from the factories' schemas (category -> Schema): the
+    # caller passes them (jax3dc.factories.registry.SCHEMAS).
     schemas: Any = None
     # Joints corrected by the legend boxes after decoding (jax3dc.grounding); None: as the model wrote them.
     grounding: Grounding | None = None

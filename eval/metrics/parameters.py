@@ -43,7 +43,7 @@ class ParametersScore:
         return asdict(self)
 
 
-Runner = Callable[[Parameters], Any]  # parameters -> an object with .parts (data_pipeline.factories.run_parameters)
+Runner = Callable[[Parameters], Any]  # parameters -> an object with .parts (jax3dc.factories.run_parameters)
 
 
 def score_parameters(key: str, reference: str, predicted: str, schemas: Mapping[str, Schema],

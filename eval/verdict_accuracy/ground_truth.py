@@ -34,7 +34,7 @@ class GroundTruthObject:
 
 
 def factory_objects(categories: Iterable[str], seeds: Iterable[int]) -> Iterator[GroundTruthObject]:
-    from data_pipeline.factories import FACTORIES, generate_object
+    from jax3dc.factories import FACTORIES, generate_object
     for category in categories:
         for seed in seeds:
             obj = generate_object(category, seed)

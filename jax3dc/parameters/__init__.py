@@ -7,8 +7,8 @@ recorded) or given by a record, so the factory runs from the record alone into t
 ``format_parameters`` / ``parse_parameters`` are the record's one-line text (what a model writes);
 ``jax3dc.constrained.parameters`` decodes it under a grammar built from the schemas.
 
-The schemas and builds themselves live with the factories (``data_pipeline.factories``: see
-``docs/stage1_parameters.md`` for the plan that moves them into the core for ``predict``).
+The schemas and builds themselves live with the factories (``jax3dc.factories``), whose
+``run_parameters`` turns a record into the object (``docs/stage1_parameters.md``).
 """
 
 from jax3dc.parameters.draws import Draws

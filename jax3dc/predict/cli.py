@@ -1,4 +1,5 @@
-"""`jax3dc predict IMAGE --stage1 code|mesh:FILE|parts:DIR --structure-model DIR [--code-model DIR] --out DIR`."""
+"""`jax3dc predict IMAGE --out DIR [--stage1 parameters|code|mesh:FILE|parts:DIR] [--stage1-model DIR]
+[--code-model DIR] [--structure-model DIR]`."""
 
 from __future__ import annotations
 
@@ -13,21 +14,28 @@ from jax3dc.release import default_structure_model
 DESCRIPTION = """\
 Predict the articulated structure of the object in IMAGE and write simulation-ready assets.
 
-Stage 1 gives one mesh per part: `--stage1 code` lets the code model (--code-model) write a part
-program from the image, run by the interpreter; `--stage1 mesh:FILE` reads a part-segmented mesh
-from any tool (a GLB with one node per part, or an OBJ with one group per part; parts named 1..K
-keep those ids, other names are numbered in natural name order); `--stage1 parts:DIR` takes
-ground-truth parts (a folder of <id>.obj, e.g. a dataset object's, to test stage 2 alone). The
-parts are centred with largest extent 1 (the normalised frame). The segmentation S is rendered
-from the image's camera (--camera), and the structure model (--structure-model) reads the image,
-S and the part legend and writes the structure.
+Stage 1 gives one mesh per part: `--stage1 parameters` lets a stage-1 model (--stage1-model;
+default: the shipped one in jax3dc/release/stage1, when it exists) write an object category and
+its parameters from the image, run by that category's factory into parts; it is the default
+--stage1 when a stage-1 model ships, so `jax3dc predict IMAGE --out DIR` needs nothing else.
+`--stage1 code` lets the code model (--code-model) write a part program from the image, run by
+the interpreter; `--stage1 mesh:FILE` reads a part-segmented mesh from any tool (a GLB with one
+node per part, or an OBJ with one group per part; parts named 1..K keep those ids, other names
+are numbered in natural name order); `--stage1 parts:DIR` takes ground-truth parts (a folder of
+<id>.obj, e.g. a dataset object's, to test stage 2 alone). The parts are centred with largest
+extent 1 (the normalised frame). The segmentation S is rendered from the image's camera
+(--camera), and the structure model (--structure-model) reads the image, S and the part legend
+and writes the structure.
 
 Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF: the
-model the physics check judges, its root free unless --mounted),
+model the physics check judges, its root free unless mounted),
 object.usda, object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
-with a slider per joint; open it again with `jax3dc view DIR`) (and program.txt for the code backend,
-structure_raw.txt when the model's JSON is invalid), prompt.txt (the structure model's prompt).
-A bad input stops with one error line; the outputs written before it are kept.
+with a slider per joint; open it again with `jax3dc view DIR`) (and parameters.txt and program.txt
+for the parameters backend, program.txt for the code backend, structure_raw.txt when the model's
+JSON is invalid), prompt.txt (the structure model's prompt).
+A bad input stops with one error line; the outputs written before it are kept. The parameters and
+code backends first refuse an image too small (under 32 px a side) or with no object in it (one
+flat colour, or noise).
 """
 
 CAMERA_HELP = ("JSON file with the image's camera in the normalised object frame (centre at the origin, "
@@ -50,13 +58,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"{name:<{width}} {path}", flush=True)
 
     result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
+                     stage1_model_dir=args.stage1_model,
                      scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
                      constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
                      mounted=args.mounted, on_output=show, progress=True, max_image_pixels=args.max_image_pixels,
                      ground_joints=args.ground_joints)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
-    held = " with its root held (--mounted)" if args.mounted else ""
+    held = " with its root held (mounted)" if result.mounted else ""
     print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check{held} {verdict} (see physics.json)")
     return 0
 
@@ -65,12 +74,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("predict", help="image in, articulated simulation-ready object out",
                               description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("image", help="the input image (PNG, JPEG, ...)")
-    p.add_argument("--stage1", required=True, metavar="code|mesh:FILE|parts:DIR",
-                   help="where the part meshes come from: `code` (the code model), `mesh:FILE` (.glb/.gltf/.obj) "
-                        "or `parts:DIR` (a folder of <id>.obj)")
+    p.add_argument("--stage1", metavar="parameters|code|mesh:FILE|parts:DIR",
+                   help="where the part meshes come from: `parameters` (a stage-1 model writes a factory's "
+                        "parameters; the default when a stage-1 model is given or ships), `code` (the code model), "
+                        "`mesh:FILE` (.glb/.gltf/.obj) or `parts:DIR` (a folder of <id>.obj)")
     p.add_argument("--structure-model", metavar="DIR", default=str(default_structure_model()),
                    help="stage-2 checkpoint folder (config.json + safetensors; default: the shipped model in "
                         "jax3dc/release, see its MODEL_CARD.md)")
+    p.add_argument("--stage1-model", metavar="DIR",
+                   help="stage-1 model folder for --stage1 parameters (a parameters language model's checkpoint "
+                        "folder; default: jax3dc/release/stage1 when it ships)")
     p.add_argument("--code-model", metavar="DIR",
                    help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
     p.add_argument("--camera", metavar="FILE", help=CAMERA_HELP)
@@ -85,7 +98,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "jax3dc exports write; the default) or y (glTF's convention, +Y up, front +Z, e.g. Blender's "
                         "glTF exporter)")
     p.add_argument("--unconstrained", action="store_true",
-                   help="decode the structure without its grammar (default: the output always parses)")
+                   help="decode without the grammars: the structure's, and stage 1's part-program or parameter "
+                        "grammar (default: every output parses)")
     p.add_argument("--candidates", type=positive_int, default=1, metavar="K",
                    help="K structures from one decode (the first greedy, the rest sampled); the physics verdict "
                    "chooses, candidates.json says which and why (default 1)")
@@ -95,11 +109,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--ground-joints", action="store_true",
                    help="correct each joint's type, axis and hinge line with the part boxes (off by default: on the "
                    "release-3 benchmark it did not raise success on held-out real objects; docs/runs/grounding_20261128)")
-    p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=False,
+    p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=None,
                    help="the object is fixed in place in use (a faucet, a toilet, a door or window frame): the "
                         "physics check holds its root instead of standing it free on a floor, the candidates "
                         "and repairs are judged so, and object.xml keeps its base fixed (without it, its root "
-                        "is free, as in the check; default: not mounted; an image names no category)")
+                        "is free, as in the check; default: mounted when --stage1 parameters names such a "
+                        "category (faucet, toilet, door, window), else not)")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
                    help="model compute dtype (float32 on CPU is slower but exact)")
     p.add_argument("--max-image-pixels", type=positive_int, default=MAX_IMAGE_PIXELS, metavar="N",

@@ -1,4 +1,4 @@
-"""The two models at inference, on in-memory images: text in, text out, through the one sampler.
+"""The models at inference, on in-memory images: text in, text out, through the one sampler.
 
 ``predict`` has an image from disk and an S it rendered; it hands them (as PNG bytes, lossless) to
 ``jax3dc.sampler.Sampler.generate_batch``, the decode that ``eval run`` uses for records, one
@@ -12,7 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+import numpy as np
+
 from jax3dc.grounding import Grounding
+from jax3dc.render import png_bytes
 from jax3dc.sampler import DecodeOptions, Sampler
 
 TextModel = Callable[[str], str]
@@ -26,7 +29,7 @@ class ImageExample:
     """One prediction's images and prompt, shaped as the sampler's ``Example`` (a dataset record is one too)."""
 
     image_png: bytes
-    seg_png: bytes  # b"" for the code task: I alone
+    seg_png: bytes  # b"" for the code and parameters tasks: I alone
     prompt: str
     key: str = IMAGE_KEY
 
@@ -63,3 +66,17 @@ def code_model(sampler: Sampler, image_png: bytes, max_new_tokens: int, constrai
     under the part-program grammar unless ``constrained`` is off)."""
     return lambda prompt: generate_texts(sampler, ImageExample(image_png, b"", prompt), "code", max_new_tokens,
                                          DecodeOptions(constrained=constrained))[0][0]
+
+
+def parameters_model(sampler: Sampler, max_new_tokens: int, constrained: bool = True) -> Callable[[np.ndarray], str]:
+    """Stage 1, parameters backend: reads I (RGB uint8) and the fixed parameters prompt and writes a
+    factory's category and parameters (greedy; under the parameter grammar of the factories'
+    schemas unless ``constrained`` is off). The budget is at most one token per byte of the longest
+    text the schemas allow, and the stop token."""
+    from jax3dc.constrained.parameters import longest_text
+    from jax3dc.factories.registry import SCHEMAS  # here: the other backends never load the factories
+
+    budget = min(max_new_tokens, longest_text(SCHEMAS) + 1)
+    options = DecodeOptions(constrained=constrained, schemas=SCHEMAS)
+    return lambda rgb: generate_texts(sampler, ImageExample(png_bytes(rgb), b"", ""), "parameters", budget,
+                                      options)[0][0]

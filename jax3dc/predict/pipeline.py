@@ -4,8 +4,11 @@ Steps, each writing its outputs into ``out`` as soon as they exist, so that a fa
 leaves every output made before it (and the report says what failed):
   1. image I (any image Pillow reads; transparency on white, as the model's processor does) -> image.png,
      and the palette of this image (seeded from its bytes);
-  2. stage 1: part meshes (code model -> part program -> interpreter, a segmented mesh file, or
-     a parts folder) -> parts/ (+ program.txt for the code backend) and the stage-2 prompt -> prompt.txt;
+  2. stage 1: part meshes (a stage-1 model -> factory parameters -> the factory, code model -> part
+     program -> interpreter, a segmented mesh file, or a parts folder) -> parts/ (+ parameters.txt
+     and program.txt for the parameters backend, program.txt for the code backend) and the
+     stage-2 prompt -> prompt.txt; the backends that read the image first refuse one with no
+     object in it (jax3dc.predict.image_check);
   3. S rendered from the image's camera -> seg.png;
   4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
      canonical); invalid output -> structure_raw.txt and a StructureError;
@@ -15,7 +18,8 @@ leaves every output made before it (and the report says what failed):
      structure; viewer_files/ beside it): the object in 3D with its joints and verdict (jax3dc.viewer).
 
 The models are plain text-in/text-out callables: pass ``generate_structure`` / ``generate_program``
-to stand in for a checkpoint (tests do; so can a caller with its own model server).
+(or the image-in ``read_parameters``) to stand in for a checkpoint (tests do; so can a caller with
+its own model server).
 """
 
 from __future__ import annotations
@@ -33,14 +37,17 @@ from tqdm import tqdm
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.grounding import Grounding
+from jax3dc.mounted import is_mounted
 from jax3dc.palette import object_palette
 from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
+from jax3dc.predict.image_check import check_object_image
 from jax3dc.predict.models import TextModel, code_model, structure_candidates, structure_model
 from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
 from jax3dc.predict.report import ReportInputs, write_report
 from jax3dc.predict.segmentation import default_camera, render_segmentation
-from jax3dc.predict.stage1 import (CODE, MESH, Stage1, parse_stage1, stage1_from_mesh, stage1_from_parts_dir,
-                                   stage1_from_program)
+from jax3dc.predict.stage1 import (CODE, MESH, PARAMETERS, Stage1, parse_stage1, stage1_from_mesh,
+                                   stage1_from_parameters, stage1_from_parts_dir, stage1_from_program)
+from jax3dc.predict.stage1_readers import Reader, ReaderSettings, load_reader
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.render import Camera, png_bytes
@@ -72,6 +79,7 @@ class PredictResult:
     raw_text: str | None = None
     structure: Structure | None = None
     verdict: dict | None = None
+    mounted: bool = False  # whether the physics check held the root and object.xml keeps its base fixed
 
 
 def _image_and_digest(image: str | Path | Image.Image, max_pixels: int) -> tuple[Image.Image, str]:
@@ -113,6 +121,18 @@ def program_text(image_png: bytes, code_model_dir: str | Path | None, generate_p
             raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
         generate_program = code_model(checkpoints.get(code_model_dir), image_png, max_new_tokens, constrained)
     return generate_program(CODE_PROMPT)
+
+
+def parameters_text(rgb: np.ndarray, model_dir: Path | None, read_parameters: Reader | None, max_new_tokens: int,
+                    checkpoints: Checkpoints, constrained: bool = True) -> str:
+    """The stage-1 model's parameter text for image I (RGB uint8), decoded under the parameter
+    grammar unless ``constrained`` is off (for a language model)."""
+    if read_parameters is None:
+        if model_dir is None:
+            raise InputFileError("--stage1-model", "--stage1 parameters needs a stage-1 model folder (--stage1-model "
+                                                   "DIR); none ships with this install")
+        read_parameters = load_reader(model_dir, ReaderSettings(checkpoints.get, max_new_tokens, constrained))
+    return read_parameters(rgb)
 
 
 class _Outputs:
@@ -174,6 +194,17 @@ def _repaired(structure: Structure, parts: dict, boxes: dict, check: VerdictCach
 
 
 @dataclass(frozen=True)
+class _Stage1Settings:
+    """predict's arguments for the stage-1 backends that read the image (see predict)."""
+
+    code_model_dir: str | Path | None
+    generate_program: TextModel | None
+    read_parameters: Reader | None
+    max_new_tokens: int
+    constrained: bool
+
+
+@dataclass(frozen=True)
 class _StructureSettings:
     """predict's arguments for stage 2 (see predict)."""
 
@@ -184,24 +215,33 @@ class _StructureSettings:
     candidates: int
     repair: bool
     scale: float | None
-    mounted: bool
+    mounted: bool | None  # None: decided by the category stage 1 names (jax3dc.mounted)
     grounding: Grounding | None = None
 
 
-def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, code_model_dir: str | Path | None,
-            generate_program: TextModel | None, max_new_tokens: int, constrained: bool, mesh_up: str,
+def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, given: _Stage1Settings, mesh_up: str,
             checkpoints: Checkpoints, outputs: _Outputs, max_image_pixels: int) -> tuple[Image.Image, bytes, str, Stage1]:
-    """I (image.png) and the part meshes (parts/, program.txt for the code backend):
-    (I in RGB, its PNG bytes, the sha256 of the input, the parts)."""
+    """I (image.png) and the part meshes (parts/; parameters.txt and program.txt for the parameters
+    backend, program.txt for the code backend): (I in RGB, its PNG bytes, the sha256 of the input, the parts)."""
     rgb, digest = _image_and_digest(image, max_image_pixels)
-    image_png = png_bytes(np.asarray(rgb))  # I as the models saw it (RGB): the viewer shows it
+    pixels = np.asarray(rgb)
+    image_png = png_bytes(pixels)  # I as the models saw it (RGB): the viewer shows it
     target = outputs.out / "image.png"
     if isinstance(image, (str, Path)) and Path(image).resolve() == target.resolve():
         outputs.wrote("image", target)  # never written over the input itself
     else:
         outputs.binary("image", "image.png", image_png)
-    if backend == CODE:
-        program = program_text(image_png, code_model_dir, generate_program, max_new_tokens, checkpoints, constrained)
+    if backend in (PARAMETERS, CODE):
+        check_object_image(pixels, str(image) if isinstance(image, (str, Path)) else "the input image")
+    if backend == PARAMETERS:
+        text = parameters_text(pixels, source, given.read_parameters, given.max_new_tokens, checkpoints,
+                               given.constrained)
+        outputs.text("parameters", "parameters.txt", text)  # kept even when it fails to run
+        parts_in = stage1_from_parameters(text)
+        outputs.text("program", "program.txt", parts_in.program)
+    elif backend == CODE:
+        program = program_text(image_png, given.code_model_dir, given.generate_program, given.max_new_tokens,
+                                checkpoints, given.constrained)
         outputs.text("program", "program.txt", program)  # kept even when it fails to run
         parts_in = stage1_from_program(program)
     elif backend == MESH:
@@ -219,7 +259,7 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
     the choice, the repair and physics.json)."""
     progress.step("structure model")
     parts_in = result.stage1
-    metres = settings.scale if settings.scale is not None else (1.0 if parts_in.program is not None else parts_in.scale)
+    metres = settings.scale if settings.scale is not None else (1.0 if parts_in.source == CODE else parts_in.scale)
     check = VerdictCache(Physics(parts_in.parts, metres, settings.mounted))
     generate = settings.generate
     structure = None
@@ -257,30 +297,36 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
     outputs.wrote("physics", path)
 
 
-def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: str | Path | None = None,
+def predict(image: str | Path | Image.Image, stage1: str | None = None, structure_model_dir: str | Path | None = None,
             code_model_dir: str | Path | None = None, out: str | Path = "prediction", camera: Camera | None = None,
             generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
+            stage1_model_dir: str | Path | None = None, read_parameters: Reader | None = None,
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
             dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
-            mounted: bool = False, on_output: OutputListener | None = None, progress: bool = False,
+            mounted: bool | None = None, on_output: OutputListener | None = None, progress: bool = False,
             max_image_pixels: int = MAX_IMAGE_PIXELS, ground_joints: bool = False) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
-    ``stage1``: "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1). ``structure_model_dir`` / ``code_model_dir``: checkpoint
-    folders (``jax3dc.sampler.Sampler.load``); ``generate_structure`` (SPEC §3 prompt text ->
-    structure JSON text, seeing I and S) and ``generate_program`` (the code prompt -> part program
-    text, seeing I) replace them. ``camera``: the image's camera in the normalised frame (default:
-    a front view fitting the object). ``scale``: metres per nu for the exports (default: the mesh
-    file's units per nu, assumed metres; 1.0 for the code backend, whose programs are in nu).
+    ``stage1``: "parameters", "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1); None:
+    "parameters" when a stage-1 model is given or ships, else an InputFileError naming what to pass.
+    ``structure_model_dir`` / ``code_model_dir``: checkpoint folders (``jax3dc.sampler.Sampler.load``);
+    ``stage1_model_dir``: the parameters backend's model folder (jax3dc.predict.stage1_readers; default:
+    the shipped one). ``generate_structure`` (SPEC §3 prompt text -> structure JSON text, seeing I
+    and S), ``generate_program`` (the code prompt -> part program text, seeing I) and
+    ``read_parameters`` (I as RGB uint8 -> parameter text) replace them. ``camera``: the image's
+    camera in the normalised frame (default: a front view fitting the object). ``scale``: metres
+    per nu for the exports (default: the mesh file's units per nu, assumed metres; the factory's for
+    the parameters backend; 1.0 for the code backend, whose programs are in nu).
     ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
-    ``constrained``: decode under the structure grammar and, for the code backend, the part-program
-    grammar (both always parse). ``candidates`` K > 1: K
+    ``constrained``: decode under the structure grammar and, for the parameters and code backends,
+    the parameter or part-program grammar (all always parse). ``candidates`` K > 1: K
     answers from one decode (the first greedy), chosen by the physics verdict (candidates.json says
     which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
     (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
     ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
-    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free (an
-    image gives no category to infer it from).
+    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free.
+    None: mounted when stage 1 names a category fixed in place in use (the parameters backend's
+    factory: ``jax3dc.mounted``), else not (the other backends name no category).
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
     ``ground_joints``: correct the decoded joints with the part boxes (jax3dc.grounding; a structure
     model folder, not a ``generate_structure``).
@@ -288,23 +334,26 @@ def predict(image: str | Path | Image.Image, stage1: str, structure_model_dir: s
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
-    backend, source = parse_stage1(stage1)  # a bad --stage1 is refused before anything is written
+    backend, source = parse_stage1(stage1, stage1_model_dir)  # a bad --stage1 is refused before anything is written
     out.mkdir(parents=True, exist_ok=True)
     outputs = _Outputs(out, on_output)
     checkpoints = Checkpoints(dtype)
     steps = _Progress(progress)
+    stage1_settings = _Stage1Settings(code_model_dir, generate_program, read_parameters, max_new_tokens, constrained)
     settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
                                   repair, scale, mounted, Grounding() if ground_joints else None)
     try:
         steps.step("stage 1")
-        rgb, image_png, digest, parts_in = _stage1(image, backend, source, code_model_dir, generate_program,
-                                                   max_new_tokens, constrained, mesh_up, checkpoints, outputs,
-                                                   max_image_pixels)
+        rgb, image_png, digest, parts_in = _stage1(image, backend, source, stage1_settings, mesh_up, checkpoints,
+                                                   outputs, max_image_pixels)
         palette = object_palette(PALETTE_CATEGORY, digest)
+        if settings.mounted is None:
+            settings = replace(settings, mounted=is_mounted(parts_in.category))
         boxes = part_boxes(parts_in.parts)
         camera_given = camera is not None
         camera = camera or default_camera(parts_in.parts)
-        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), outputs.files)
+        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), outputs.files,
+                               mounted=settings.mounted)
         outputs.text("prompt", "prompt.txt", result.prompt)
         save_parts(parts_in.parts, out / "parts")
         outputs.wrote("parts", out / "parts")

@@ -4,6 +4,9 @@ Pretrained Qwen3-VL weights cannot be fetched at run time, so the package carrie
 stage-2 structure model (bf16, under 24 MiB; SPEC §7). `predict`, `eval run` and `demo` use this
 folder when no model folder is given. MODEL_CARD.md beside this file names its data, licence,
 training run and measured tables; release_summary.json holds the recipe's own figures.
+
+A stage-1 model, when one ships, lives in ``stage1/`` beside it (``bench/stage1_model.py`` packages
+it): then ``predict IMAGE`` needs no ``--stage1``.
 """
 
 from __future__ import annotations
@@ -13,7 +16,15 @@ from pathlib import Path
 MODEL_DIR = Path(__file__).resolve().parent
 """An HF checkpoint folder (config.json, safetensors shards, tokenizer, processor config)."""
 
+STAGE1_DIR = MODEL_DIR / "stage1"
+"""The shipped stage-1 model's folder (image I -> factory parameters), absent until one ships."""
+
 
 def default_structure_model() -> Path:
     """The folder `--structure-model` / `--checkpoint` fall back to."""
     return MODEL_DIR
+
+
+def default_stage1_model() -> Path | None:
+    """The folder `--stage1-model` falls back to, or None when no stage-1 model ships."""
+    return STAGE1_DIR if STAGE1_DIR.is_dir() else None

@@ -11,9 +11,9 @@ import jax.numpy as jnp
 import numpy as np
 from flax import nnx
 
-from data_pipeline.factories.registry import SCHEMAS, run_parameters, sample_parameters
 from jax3dc.constrained import parameters_constraint
 from jax3dc.constrained.parameters import advance, allowed, initial_rows, longest_text, parameters_tables
+from jax3dc.factories.registry import SCHEMAS, run_parameters, sample_parameters
 from jax3dc.generate import GenerationConfig, generate
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL

@@ -30,7 +30,7 @@ OK = ("mat1 = material('Wood', 'oak')\n"
 
 
 def _factory_programs(seeds: int) -> list[tuple[str, str]]:
-    from data_pipeline.factories.registry import FACTORIES, build_normalised
+    from jax3dc.factories.registry import FACTORIES, build_normalised
 
     return [(f"{c}/{s}", build_normalised(c, s).program_text) for c in FACTORIES for s in range(seeds)]
 

@@ -29,7 +29,7 @@ def _prompt(n: int, joints: int | None) -> str:
 
 
 def _factory_targets() -> list[str]:
-    from data_pipeline.factories import generate_object
+    from jax3dc.factories import generate_object
 
     out = []
     for category, seed in [("cabinet", 0), ("drawer_chest", 1), ("laptop", 2), ("globe", 3), ("cell_shelf", 4), ("oven", 5)]:

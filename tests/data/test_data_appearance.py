@@ -8,7 +8,7 @@ import pytest
 import trimesh
 
 from data_pipeline.build import BuildConfig, config_doc, factory_sources, run_build
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.render import (FOVY_RANGE, Camera, Lighting, PartRenderer, paint_segmentation,
                            part_rgba, png_array, png_bytes, sample_appearance, sample_camera, sample_lighting,
                            sample_view_lighting, scene_xml)

@@ -4,7 +4,7 @@ import pytest
 
 from data_pipeline.augment import joints_match, merge_parts, split_part
 from data_pipeline.build import BuildConfig, factory_sources, run_build
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.render import png_array
 from tests.data.segmentation_ids import decode_segmentation
 from data_pipeline.samples import SourceObject, derived_rng, object_records

@@ -9,8 +9,8 @@ from data_pipeline.record import CorruptRecordError, decode_record
 from data_pipeline.samples import split_of
 from data_pipeline.shards import load_manifest, read_dataset
 from data_pipeline.views import move_joint
-from data_pipeline.factories import generate_object
 from jax3dc.errors import InputFileError
+from jax3dc.factories import generate_object
 
 CONFIG = BuildConfig(views=2, seed=5, size=48, objects_per_shard=2)
 

@@ -7,9 +7,9 @@ import pytest
 
 from data_pipeline.build import BuildConfig, factory_sources, run_build
 from data_pipeline.examples import ExampleEncoder, MissingParameters
-from data_pipeline.factories.registry import SCHEMAS, run_parameters
 from data_pipeline.record import decode_record, encode_record
 from data_pipeline.shards import read_dataset
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.parameters import parse_parameters
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.structure import boxes_to_dict

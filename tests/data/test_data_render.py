@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from data_pipeline.factories import FACTORIES, generate_object
+from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.render import png_array
 from tests.data.segmentation_ids import decode_segmentation
 from data_pipeline.samples import SourceObject, object_records

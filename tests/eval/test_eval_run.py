@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from data_pipeline.factories import generate_object
 from data_pipeline.record import Record, encode_record
 from jax3dc.cli import main
 from jax3dc.errors import InputFileError
+from jax3dc.factories import generate_object
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.palette import object_palette
 from jax3dc.prompt import build_prompt

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import trimesh
 
+from jax3dc.factories.registry import generate_object
 import jax3dc.geometry.convex_pieces as cp
-from data_pipeline.factories.registry import generate_object
 from jax3dc.physics.verdict import check_object
 from jax3dc.export.mjcf import mjcf_model
 from jax3dc.export.simulation import MIN_PIECE_M

@@ -207,7 +207,7 @@ def test_a_second_sweep_of_a_build_never_decomposes(counted: list[int], tmp_path
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """`jax3dc physics sweep` run again on the same build: the part programs give the same meshes,
     so every piece comes from the disk, and the verdicts are the first run's."""
-    from data_pipeline.factories import generate_object
+    from jax3dc.factories import generate_object
     from data_pipeline.record import Record
     from data_pipeline.shards import write_dataset
     from jax3dc.cli import main

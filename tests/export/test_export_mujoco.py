@@ -178,7 +178,7 @@ def test_nodes_and_meshes_must_match(tmp_path):
 
 def test_every_factory_object_exports_to_models_with_its_joints(tmp_path):
     """Real part meshes (sweeps, lathes, CSG) of every procedural category, through both formats."""
-    from data_pipeline.factories.registry import FACTORIES, generate_object
+    from jax3dc.factories.registry import FACTORIES, generate_object
 
     for category in sorted(FACTORIES):
         obj = generate_object(category, 3)

@@ -19,8 +19,8 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from data_pipeline.factories.registry import FACTORIES, generate_object
 from data_pipeline.importers.source import import_object
+from jax3dc.factories.registry import FACTORIES, generate_object
 from jax3dc.physics.cpu_backend import final_qpos
 from jax3dc.physics.dynamics import SETTLE_STEPS
 from jax3dc.physics.sim_model import SimOptions, build_sim_model

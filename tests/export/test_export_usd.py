@@ -15,12 +15,12 @@ import trimesh
 from pxr import Sdf, Usd, UsdGeom, UsdPhysics, UsdShade
 from scipy.spatial.transform import Rotation
 
-from data_pipeline.factories.registry import FACTORIES, generate_object
 from export_cases import CASES, EVIL_NAME, box
 from jax3dc.export.assembly import label_of
 from jax3dc.export.mjcf import mjcf_model
 from jax3dc.export.simulation import MIN_PIECE_M
 from jax3dc.export.usd import export_usd, usd_model
+from jax3dc.factories.registry import FACTORIES, generate_object
 from jax3dc.materials import MATERIALS
 from jax3dc.structure.schema import Material, Node, Structure
 from tests.shared_fixtures import partnet_object

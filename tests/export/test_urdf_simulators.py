@@ -23,11 +23,11 @@ import trimesh
 import yourdfpy
 from scipy.spatial.transform import Rotation
 
-from data_pipeline.factories.registry import FACTORIES, generate_object
 from data_pipeline.importers.source import import_object
 from export_cases import CASES
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import SCENE_ROOT, export_urdf
+from jax3dc.factories.registry import FACTORIES, generate_object
 from jax3dc.structure.schema import Structure
 from tests.shared_fixtures import PARTNET_MOBILITY, partnet_object
 

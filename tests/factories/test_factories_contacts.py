@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from data_pipeline.factories import FACTORIES, generate_object
+from jax3dc.factories import FACTORIES, generate_object
 
 SAMPLES = 2000
 MOVING_TOL, RIGID_TOL = 0.01, 0.03

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from data_pipeline.factories import FACTORIES, generate_object
 from jax3dc.errors import Jax3dcError
+from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.program import run_program, to_blender_script
 from jax3dc.structure import parse_structure, to_json
 from jax3dc.structure.schema import FAMILIES, JOINT_TYPES, PLANES, Structure
@@ -232,7 +232,7 @@ def test_identical_across_processes_and_hash_seeds():
     import sys
 
     code = ("import hashlib, json, dataclasses\n"
-            "from data_pipeline.factories import FACTORIES, generate_object\n"
+            "from jax3dc.factories import FACTORIES, generate_object\n"
             "h = hashlib.sha256()\n"
             "for c in sorted(FACTORIES):\n"
             "    g = generate_object(c, 3)\n"
@@ -267,7 +267,7 @@ def _instance_groups(relations):
 @pytest.mark.parametrize("category", CATEGORIES)
 def test_extracted_relations_agree_with_the_design(category):
     """jax3dc.relations, reading only the meshes, finds exactly the copies the factory built."""
-    from data_pipeline.factories.registry import build_normalised
+    from jax3dc.factories.registry import build_normalised
 
     for seed in range(4):
         built = build_normalised(category, seed)

@@ -4,9 +4,9 @@ category gives the object of the seeded path, and any record that fits the schem
 import numpy as np
 import pytest
 
-from data_pipeline.factories import FACTORIES, generate_object
-from data_pipeline.factories.registry import SCHEMAS, run_parameters, sample_parameters, seeded_draws
-from data_pipeline.factories.writer import ProgramWriter
+from jax3dc.factories import FACTORIES, generate_object
+from jax3dc.factories.registry import SCHEMAS, run_parameters, sample_parameters, seeded_draws
+from jax3dc.factories.writer import ProgramWriter
 from jax3dc.parameters import (Chance, Choice, Count, Draws, Number, ParameterError, Parameters, Schema,
                                format_parameters, parse_parameters)
 from jax3dc.structure import to_json

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from data_pipeline.factories import generate_object
-from data_pipeline.factories.registry import SCHEMAS
 from data_pipeline.record import Record, encode_record
+from jax3dc.factories import generate_object
+from jax3dc.factories.registry import SCHEMAS
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.processing.bpe import config_for_tokenizer
 from jax3dc.model.config import Qwen3VLConfig

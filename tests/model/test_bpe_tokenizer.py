@@ -15,11 +15,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from transformers import AutoTokenizer
 
-from data_pipeline.factories import generate_object
 from data_pipeline.record import Record
 from data_pipeline.shards import write_dataset
 from jax3dc.cli import main as cli_main
 from jax3dc.errors import InputFileError
+from jax3dc.factories import generate_object
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.processing.bpe import QWEN_ADDED_TOKENS, chat_segments, config_for_tokenizer, train_bpe
 from jax3dc.processing.chat import IGNORE_INDEX, VL_CHAT_TEMPLATE, encode_chat

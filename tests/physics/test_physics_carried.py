@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from data_pipeline.factories import generate_object
 from eval.verdict_accuracy.ground_truth import changes_motion
 from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.factories import generate_object
 from jax3dc.physics.verdict import check_object
 
 

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from data_pipeline.factories import generate_object
 from eval.verdict_accuracy.mutations import mutations_of
+from jax3dc.factories import generate_object
 from jax3dc.physics.sim_model import SimOptions, build_sim_model
 from jax3dc.physics.verdict import check_object
 from jax3dc.geometry.convex_pieces import HULL_MAX_VERTICES, convex_pieces

@@ -86,7 +86,7 @@ def test_mjx_and_c_give_the_same_penetration_verdicts():
 
 def _sweep_build(tmp_path):
     """A data build of two factory objects, an import without a program, and two unusable records."""
-    from data_pipeline.factories import generate_object
+    from jax3dc.factories import generate_object
     from data_pipeline.record import Record
     from data_pipeline.shards import write_dataset
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.exported import load_exported
 from eval.verdict_accuracy.ground_truth import GroundTruthObject, factory_objects, imported_objects
 from eval.verdict_accuracy.mutations import mutations_of

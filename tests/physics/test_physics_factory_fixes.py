@@ -10,7 +10,7 @@ import itertools
 import numpy as np
 import pytest
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.floor import first_below_floor
 from jax3dc.physics.kinematics import joint_motion
 from jax3dc.physics.tolerances import LIMIT_TOL_HINGE_RAD

@@ -9,8 +9,8 @@ import json
 import numpy as np
 import pytest
 
-from data_pipeline.factories import generate_object
 from eval.verdict_accuracy import ground_truth
+from jax3dc.factories import generate_object
 from jax3dc.physics.findings import FAILURE, WARNING, Finding, Verdict, describe
 from jax3dc.physics.tolerances import LIMIT_PAST_CONTACT_HINGE_RAD
 from jax3dc.physics.verdict import check_object

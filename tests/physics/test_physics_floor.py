@@ -10,7 +10,7 @@ import pytest
 import trimesh
 from scipy.spatial import ConvexHull
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.floor import _hull_vertices, first_below_floor
 from eval.verdict_accuracy.mutations import mutations_of
 from jax3dc.physics.tolerances import FLOOR_TOL_NU

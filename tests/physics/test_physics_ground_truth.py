@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.crossing import crossings
 from jax3dc.physics.findings import WARNING, Finding, describe
 from eval.verdict_accuracy.ground_truth import changes_motion, imported_objects

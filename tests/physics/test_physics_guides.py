@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.guides import carried_out_of_guide
 from jax3dc.physics.tolerances import SLIDE_GUIDE_OVERLAP_NU
 from jax3dc.physics.verdict import check_object

@@ -54,7 +54,7 @@ SWEEP_LIKE = Shapes(objects=8, bodies=48, geoms=192, pairs=1536, nq=48, items=10
 
 
 def _objects():
-    from data_pipeline.factories import FACTORIES
+    from jax3dc.factories import FACTORIES
 
     fixtures = sorted(p for p in PARTNET_MOBILITY.iterdir() if (p / "mobility.urdf").is_file())
     return list(factory_objects(sorted(FACTORIES), [0])) + list(imported_objects(fixtures))

@@ -70,7 +70,7 @@ def test_penetration_depth_is_the_separating_axis_depth():
 
 
 def _cabinet():
-    from data_pipeline.factories import generate_object
+    from jax3dc.factories import generate_object
     from jax3dc.physics.sim_model import SimOptions, build_sim_model
 
     obj = generate_object("cabinet", 0)

@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import trimesh
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.crossing import _piece_boards, crossings
 from eval.verdict_accuracy.ground_truth import imported_objects
 from eval.verdict_accuracy.mutations import mutations_of

@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics import cpu_backend, dynamics
 from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
 from jax3dc.physics.findings import describe

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.dynamics import tolerated_pairs
 from jax3dc.physics.sim_model import SimOptions, build_sim_model
 from jax3dc.physics.states import check_states

@@ -8,7 +8,7 @@ import dataclasses
 import pytest
 import trimesh
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.findings import Finding, describe
 from eval.verdict_accuracy.mutations import mutations_of
 from jax3dc.physics.relations import relation_disagreements

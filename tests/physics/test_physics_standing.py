@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from data_pipeline.factories import FACTORIES, generate_object
+from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.physics.dynamics import gravity
 from jax3dc.physics.findings import describe
 from eval.verdict_accuracy.ground_truth import factory_objects

@@ -9,7 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from data_pipeline.factories import FACTORIES, generate_object
+from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.physics.verdict import check_object
 
 BENCH = Path(__file__).resolve().parents[2] / "bench"

@@ -11,7 +11,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import numpy as np  # noqa: E402
 import trimesh  # noqa: E402
 
-from data_pipeline.factories import generate_object  # noqa: E402
+from jax3dc.factories import generate_object  # noqa: E402
 from jax3dc.render import Camera, Lighting, PartRenderer, paint_segmentation, png_bytes  # noqa: E402
 from jax3dc.geometry.parts import part_boxes  # noqa: E402
 from jax3dc.structure import canonicalize, to_json  # noqa: E402

@@ -12,7 +12,7 @@ import json
 
 import mujoco
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.physics.verdict import check_object
 from jax3dc.predict import predict
 from jax3dc.geometry.parts import part_boxes, save_parts

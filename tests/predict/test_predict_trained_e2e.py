@@ -20,7 +20,7 @@ import json
 import pytest
 import trimesh
 
-from data_pipeline.factories import generate_object
+from jax3dc.factories import generate_object
 from jax3dc.render import mujoco  # mujoco imported after render chose the GL backend
 from data_pipeline.shards import shard_paths
 from eval.records import read_records

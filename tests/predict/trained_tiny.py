@@ -16,9 +16,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from data_pipeline.build import BuildConfig, SourceSpec, run_build
-from data_pipeline.factories import object_id
 from data_pipeline.samples import split_of
 from jax3dc.cli import main
+from jax3dc.factories import object_id
 
 CATEGORY = "stapler"  # 3 parts and 1 hinge for every seed (checked over seeds 0..39 in the test)
 RENDER_SIZE = 64

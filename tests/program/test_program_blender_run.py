@@ -10,7 +10,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from data_pipeline.factories import FACTORIES, generate_object
+from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.program import run_program, to_blender_script
 
 from test_program_primitives import CASES

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from data_pipeline.examples import ExampleEncoder
-from data_pipeline.factories import FACTORIES
-from data_pipeline.factories import generate_object
 from jax3dc.errors import InputFileError
+from jax3dc.factories import FACTORIES
+from jax3dc.factories import generate_object
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.prompt import build_prompt, legend_boxes

@@ -6,9 +6,9 @@ from pathlib import Path
 import pytest
 
 from data_pipeline.build import BuildConfig, SourceSpec, factory_sources, import_sources, run_build
-from data_pipeline.factories import object_id
 from data_pipeline.record import Record
 from data_pipeline.shards import read_dataset
+from jax3dc.factories import object_id
 from tests.verify.verified_cases import IMPORTED
 from tests.shared_fixtures import partnet_object
 

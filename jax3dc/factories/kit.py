@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 
-from data_pipeline.factories.writer import JointSpec, ProgramWriter, Ref
+from jax3dc.factories.writer import JointSpec, ProgramWriter, Ref
 from jax3dc.parameters import Draws
 
 WOODS = ("light oak veneer", "walnut", "white painted MDF", "pine", "dark stained birch", "ash")

@@ -15,8 +15,8 @@ from typing import Callable
 import numpy as np
 import trimesh
 
-from data_pipeline.factories import appliances, furniture, household, shelves, small_objects, storage
-from data_pipeline.factories.writer import Normalised, ProgramWriter
+from jax3dc.factories import appliances, furniture, household, shelves, small_objects, storage
+from jax3dc.factories.writer import Normalised, ProgramWriter
 from jax3dc.errors import Jax3dcError
 from jax3dc.mounted import MOUNTED_CATEGORIES
 from jax3dc.parameters import Draws, ParameterError, Parameters, Schema

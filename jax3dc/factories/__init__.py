@@ -16,6 +16,6 @@ What every object satisfies (tests/factories check it for several seeds):
   * the same (category, seed) gives byte-identical program text and structure JSON.
 """
 
-from data_pipeline.factories.registry import FACTORIES, Factory, GeneratedObject, generate_object, object_id
+from jax3dc.factories.registry import FACTORIES, Factory, GeneratedObject, generate_object, object_id
 
 __all__ = ["FACTORIES", "Factory", "GeneratedObject", "generate_object", "object_id"]

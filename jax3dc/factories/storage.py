@@ -3,8 +3,8 @@ nightstand, safe."""
 
 from __future__ import annotations
 
-from data_pipeline.factories import kit
-from data_pipeline.factories.writer import JointSpec, ProgramWriter
+from jax3dc.factories import kit
+from jax3dc.factories.writer import JointSpec, ProgramWriter
 from jax3dc.parameters import Chance as B, Choice as K, Count as C, Draws, Number as N, Schema
 
 # a door, or two meeting in the middle (_door_pair)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import math
 
-from data_pipeline.factories import kit
-from data_pipeline.factories.writer import JointSpec, ProgramWriter
+from jax3dc.factories import kit
+from jax3dc.factories.writer import JointSpec, ProgramWriter
 from jax3dc.parameters import Chance as B, Choice as K, Count as C, Draws, Number as N, Schema
 
 
