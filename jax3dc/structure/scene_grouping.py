@@ -1,0 +1,242 @@
+"""Objects of a scene kept apart at decode time, from the parts' own boxes (issue 47).
+
+In a scene (SPEC §4) different objects are separate bodies: pieces of furniture stand apart on
+the floor, and an item on a piece of furniture touches it only where its base rests on the top
+face. A model that reads the legend may still wire two objects into one tree (parent edges across
+objects). This step reads the object partition from the legend boxes and fixes the model's tree:
+
+1. **Bodies**: parts whose boxes touch (gap at most ``tol`` on every axis) are joined; each
+   connected set is one body.
+2. **Supports**: inside a body, a horizontal plane with every part wholly above or wholly below it
+   and the upper parts resting on the lower ones only inside the top face of one supporting part
+   (their footprint smaller than that face) separates an item from what it stands on; repeated.
+3. **Regrouping**: a parent edge between parts of different objects is cut; within one object the
+   model's edges are kept, and a piece left without its parent hangs, rigidly or with the joint it
+   had, from the nearest part of its object outside its own subtree.
+
+The step runs only where the model wrote several trees (it read a scene): a single object's parts
+need not touch (a toilet seat held over its bowl, knobs on a stove top), so geometry alone would
+split it, and a structure of one tree is left exactly as written. Parts the legend gives no box
+are left where the model put them. The result is always a valid structure
+when the input is: ids, materials and relations are kept, every cut leaves a forest.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping
+from dataclasses import replace
+
+import numpy as np
+
+from jax3dc.errors import StructureError
+from jax3dc.structure.schema import Box, Node, Structure
+from jax3dc.structure.serialize import to_dict
+from jax3dc.structure.validate import parse_structure
+
+CONTACT_TOLERANCE = 0.004
+"""nu: the largest gap between two boxes that still counts as contact. Legend numbers carry 3
+decimals (up to 0.001 off per centroid and per half extent); the gaps the scene builder leaves
+between objects (5 cm, 2.5 cm between items on one top) are 0.006 nu or more in a 4 m scene."""
+
+FOOTPRINT_SHARE = 1.0
+"""An item's footprint covers at most this share of the top it stands on; a lid or a table top
+covers all of what holds it (and is part of that object)."""
+
+HEIGHT_SHARE = 0.05
+"""An item is at least this share of the height of what it stands on (a knob on a stove is not)."""
+
+JOINT_REACH = 0.06
+"""nu: a joint the model writes between two parts at most this far apart keeps them in one object
+(a drawer or tray hangs from its parent with a small clearance); farther, it is an error."""
+
+
+def _corners(boxes: Mapping[int, Box], ids: Iterable[int]) -> tuple[list[int], np.ndarray, np.ndarray]:
+    ids = sorted(ids)
+    c = np.asarray([boxes[i].centroid for i in ids], dtype=np.float64).reshape(-1, 3)
+    e = np.abs(np.asarray([boxes[i].extent for i in ids], dtype=np.float64).reshape(-1, 3))
+    return ids, c - e / 2, c + e / 2
+
+
+def _components(ids: list[int], linked: np.ndarray) -> list[list[int]]:
+    """Connected sets of ``ids`` under the symmetric boolean matrix ``linked``."""
+    label = list(range(len(ids)))
+
+    def find(i: int) -> int:
+        while label[i] != i:
+            label[i] = label[label[i]]
+            i = label[i]
+        return i
+
+    for a, b in zip(*np.nonzero(np.triu(linked, 1))):
+        label[find(int(a))] = find(int(b))
+    groups: dict[int, list[int]] = {}
+    for k, pid in enumerate(ids):
+        groups.setdefault(find(k), []).append(pid)
+    return sorted(groups.values(), key=lambda g: g[0])
+
+
+def _touching(lo: np.ndarray, hi: np.ndarray, tol: float) -> np.ndarray:
+    gap = np.maximum(lo[:, None, :] - hi[None, :, :], lo[None, :, :] - hi[:, None, :])
+    return (gap <= tol).all(axis=-1)
+
+
+def _overlap_area(lo_a: np.ndarray, hi_a: np.ndarray, lo_b: np.ndarray, hi_b: np.ndarray) -> float:
+    side = np.minimum(hi_a[:2], hi_b[:2]) - np.maximum(lo_a[:2], lo_b[:2])
+    return float(np.prod(np.clip(side, 0.0, None)))
+
+
+def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float) -> list[list[int]] | None:
+    """The body ``ids`` cut at the lowest plane where items rest on a top face, or None."""
+    for z in sorted(set(np.round(hi[:, 2], 6))):
+        above = lo[:, 2] >= z - tol
+        below = hi[:, 2] <= z + tol
+        if not (above | below).all() or not above.any() or (above & below).all():
+            continue
+        upper = above & ~below
+        lower = ~upper
+        if not upper.any() or not lower.any():
+            continue
+        up_ids = [i for i, u in zip(ids, upper) if u]
+        pieces = _components(up_ids, _touching(lo[upper], hi[upper], tol))
+        index = {pid: k for k, pid in enumerate(ids)}
+        ok = True
+        for piece in pieces:
+            rows = [index[p] for p in piece]
+            plo, phi = lo[rows].min(axis=0), hi[rows].max(axis=0)
+            if plo[2] > z + tol:  # touches the lower parts only through other upper parts: not resting here
+                ok = False
+                break
+            area = float(np.prod(np.clip(phi[:2] - plo[:2], 0.0, None)))
+            centre = (plo[:2] + phi[:2]) / 2
+            if phi[2] - plo[2] < HEIGHT_SHARE * (hi[lower, 2].max() - lo[lower, 2].min()):
+                ok = False  # a knob or a cushion on its own object's top, not an item standing there
+                break
+            host = [k for k in np.nonzero(lower)[0] if abs(hi[k, 2] - z) <= tol
+                    and (lo[k, :2] <= centre).all() and (centre <= hi[k, :2]).all()
+                    and area <= FOOTPRINT_SHARE * float(np.prod(hi[k, :2] - lo[k, :2]))]
+            if not host:
+                ok = False
+                break
+        if ok:
+            return [up for up in pieces] + [[i for i, low in zip(ids, lower) if low]]
+    return None
+
+
+def object_groups(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[list[int]]:
+    """The parts of each physical object (sorted lists, ordered by smallest id) from their boxes."""
+    if not boxes:
+        return []
+    ids, lo, hi = _corners(boxes, boxes)
+    todo = _components(ids, _touching(lo, hi, tol))
+    done: list[list[int]] = []
+    while todo:
+        body = todo.pop()
+        b_ids, b_lo, b_hi = _corners(boxes, body)
+        pieces = _support_split(b_ids, b_lo, b_hi, tol) if len(body) > 1 else None
+        if pieces is None:
+            done.append(b_ids)
+            continue
+        for piece in pieces:  # the lower part may itself be several bodies once the items are gone
+            p_ids, p_lo, p_hi = _corners(boxes, piece)
+            todo.extend(_components(p_ids, _touching(p_lo, p_hi, tol)))
+    return sorted(done, key=lambda g: g[0])
+
+
+def _gap(a: Box, b: Box) -> float:
+    """Largest per-axis gap between two boxes (negative: they overlap on every axis)."""
+    ca, cb = np.asarray(a.centroid), np.asarray(b.centroid)
+    half = (np.abs(np.asarray(a.extent)) + np.abs(np.asarray(b.extent))) / 2
+    return float((np.abs(ca - cb) - half).max())
+
+
+def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> dict[int, int]:
+    """Part id -> object label: geometric objects (``object_groups``) joined where the model put a
+    joint between two parts within ``JOINT_REACH`` of each other (a lid on its kettle, a drawer
+    hanging under a desk's top), so only rigid attachments the geometry contradicts are cut. A part
+    without a box takes its parent's label (a root without a box is its own object)."""
+    boxed = {p: boxes[p] for p in structure.nodes if p in boxes}
+    label = {p: k for k, group in enumerate(object_groups(boxed, tol)) for p in group}
+    for child, node in structure.nodes.items():
+        p = node.parent
+        if node.joint is not None and child in boxed and p in boxed and _gap(boxed[child], boxed[p]) <= JOINT_REACH:
+            old, new = label[child], label[p]
+            if old != new:
+                label = {q: new if k == old else k for q, k in label.items()}
+
+    def of(pid: int, seen: frozenset = frozenset()) -> int:
+        if pid in label:
+            return label[pid]
+        parent = structure.nodes[pid].parent
+        label[pid] = -pid if parent is None or parent in seen else of(parent, seen | {pid})
+        return label[pid]
+
+    return {pid: of(pid) for pid in sorted(structure.nodes)}
+
+
+def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> Structure:
+    """``structure`` with one tree per object of ``object_of_parts`` (see the module docstring)."""
+    if len(structure.roots()) < 2:
+        return structure
+    label = object_of_parts(structure, boxes, tol)
+    if len(set(label.values())) < 2:
+        return structure
+    nodes = dict(structure.nodes)
+    loose: dict[int, bool] = {}  # local root -> whether it was cut from a parent (keeps its joint)
+    for pid, node in nodes.items():
+        if node.parent is None:
+            loose[pid] = False
+        elif label[pid] != label[node.parent]:
+            loose[pid] = True
+            nodes[pid] = replace(node, parent=None, joint=None)
+    if not any(loose.values()) and len({label[r] for r in loose}) == len(loose):
+        return structure
+    def root_of(pid: int) -> int:
+        while nodes[pid].parent is not None:
+            pid = nodes[pid].parent
+        return pid
+
+    tree = {pid: root_of(pid) for pid in nodes}  # part -> its local root
+    for obj in sorted(set(label.values())):
+        roots = sorted(r for r in loose if label[r] == obj)
+        if len(roots) < 2:
+            continue
+        members = {r: sorted(p for p in nodes if tree[p] == r) for r in roots}
+
+        def size(r: int) -> float:
+            return max((boxes[p].volume for p in members[r] if p in boxes), default=0.0)
+
+        main = max(roots, key=lambda r: (size(r), -r))
+        placed = set(members[main])
+        for r in sorted((r for r in roots if r != main), key=lambda r: (-size(r), r)):
+            host = min(placed, key=lambda p: (_gap(boxes[p], boxes[r]) if p in boxes and r in boxes else np.inf, p))
+            old = structure.nodes[r]
+            nodes[r] = replace(nodes[r], parent=host, joint=old.joint if loose[r] else None)
+            placed.update(members[r])
+    return replace(structure, nodes=nodes)
+
+
+def regroup_text(text: str, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> str:
+    """A generated document regrouped (``regroup``); only parents and joints of the nodes that
+    change are rewritten. A text that does not validate against the legend's ids is returned as
+    it is (validation reports it downstream, as it should)."""
+    start, end = text.find("{"), text.rfind("}") + 1
+    try:
+        structure = parse_structure(text[start:end], part_ids=boxes) if 0 <= start < end else None
+    except StructureError:
+        return text
+    if structure is None:
+        return text
+    grouped = regroup(structure, boxes, tol)
+    changed = [p for p in grouped.nodes if grouped.nodes[p] != structure.nodes[p]]
+    if not changed:
+        return text
+    doc = json.loads(text[start:end])
+    written = to_dict(grouped)["nodes"]
+    for pid in changed:
+        node = doc["nodes"][str(pid)]
+        node["parent"] = grouped.nodes[pid].parent
+        node.pop("joint", None)
+        if "joint" in written[str(pid)]:
+            node["joint"] = written[str(pid)]["joint"]
+    return text[:start] + json.dumps(doc, separators=(",", ":"), ensure_ascii=False) + text[end:]
