@@ -123,23 +123,26 @@ def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float) -
     return None
 
 
+def bodies(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[list[int]]:
+    """Parts joined by touching boxes (step 1), sorted lists ordered by smallest id."""
+    ids, lo, hi = _corners(boxes, boxes)
+    return _components(ids, _touching(lo, hi, tol))
+
+
 def object_groups(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[list[int]]:
     """The parts of each physical object (sorted lists, ordered by smallest id) from their boxes."""
     if not boxes:
         return []
-    ids, lo, hi = _corners(boxes, boxes)
-    todo = _components(ids, _touching(lo, hi, tol))
     done: list[list[int]] = []
-    while todo:
-        body = todo.pop()
+    for body in bodies(boxes, tol):
         b_ids, b_lo, b_hi = _corners(boxes, body)
         pieces = _support_split(b_ids, b_lo, b_hi, tol) if len(body) > 1 else None
         if pieces is None:
             done.append(b_ids)
             continue
-        for piece in pieces:  # the lower part may itself be several bodies once the items are gone
-            p_ids, p_lo, p_hi = _corners(boxes, piece)
-            todo.extend(_components(p_ids, _touching(p_lo, p_hi, tol)))
+        *items, rest = pieces  # an item is not cut again: its lid rests on its body
+        done.extend(items)
+        done.extend(object_groups({p: boxes[p] for p in rest}, tol))
     return sorted(done, key=lambda g: g[0])
 
 
@@ -157,9 +160,11 @@ def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float =
     without a box takes its parent's label (a root without a box is its own object)."""
     boxed = {p: boxes[p] for p in structure.nodes if p in boxes}
     label = {p: k for k, group in enumerate(object_groups(boxed, tol)) for p in group}
+    body = {p: k for k, group in enumerate(bodies(boxed, tol)) for p in group}
     for child, node in structure.nodes.items():
         p = node.parent
-        if node.joint is not None and child in boxed and p in boxed and _gap(boxed[child], boxed[p]) <= JOINT_REACH:
+        if (node.joint is not None and child in boxed and p in boxed and body[child] != body[p]
+                and _gap(boxed[child], boxed[p]) <= JOINT_REACH):
             old, new = label[child], label[p]
             if old != new:
                 label = {q: new if k == old else k for q, k in label.items()}
@@ -179,8 +184,6 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
     if len(structure.roots()) < 2:
         return structure
     label = object_of_parts(structure, boxes, tol)
-    if len(set(label.values())) < 2:
-        return structure
     nodes = dict(structure.nodes)
     loose: dict[int, bool] = {}  # local root -> whether it was cut from a parent (keeps its joint)
     for pid, node in nodes.items():

@@ -1,0 +1,148 @@
+"""Scene grouping: parent edges between separate objects are cut from the legend boxes, while a
+single tree, parts without boxes and the model's joints inside an object are left alone, and a
+valid structure never comes out invalid."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from data_pipeline.scenes import make_scene
+from jax3dc.geometry.parts import part_boxes
+from jax3dc.structure import Box, Joint, Material, Node, Structure, parse_structure, to_json, validate
+from jax3dc.structure.scene_grouping import object_groups, regroup, regroup_text
+
+HINGE = Joint("hinge", (0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (0.0, 1.0))
+
+
+def box(lo: tuple[float, float, float], hi: tuple[float, float, float]) -> Box:
+    return Box(tuple((a + b) / 2 for a, b in zip(lo, hi)), tuple(b - a for a, b in zip(lo, hi)))
+
+
+def structure(parents: dict[int, int | None], joints: dict[int, Joint] | None = None) -> Structure:
+    joints = joints or {}
+    return Structure({0: Material("Wood")}, {p: Node(q, 0, joints.get(p)) for p, q in parents.items()})
+
+
+def groups(s: Structure) -> list[list[int]]:
+    root_of = {}
+    for p in s.nodes:
+        q = p
+        while s.nodes[q].parent is not None:
+            q = s.nodes[q].parent
+        root_of[p] = q
+    return sorted(sorted(p for p in s.nodes if root_of[p] == r) for r in set(root_of.values()))
+
+
+# A table (top 1 on legs 2, 3) with a kettle (body 4, lid 5) on its top, and a bucket 6 on the floor.
+TABLE_SCENE = {
+    1: box((-0.5, -0.2, 0.00), (0.2, 0.2, 0.05)),
+    2: box((-0.5, -0.2, -0.5), (-0.45, 0.2, 0.00)),
+    3: box((0.15, -0.2, -0.5), (0.2, 0.2, 0.00)),
+    4: box((-0.3, -0.1, 0.05), (-0.1, 0.1, 0.30)),
+    5: box((-0.25, -0.05, 0.30), (-0.15, 0.05, 0.33)),
+    6: box((0.3, -0.1, -0.5), (0.5, 0.1, -0.2)),
+}
+
+
+def test_an_item_wired_to_the_table_it_stands_on_becomes_its_own_object_and_keeps_its_lid() -> None:
+    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: None}, {5: HINGE})
+    out = regroup(s, TABLE_SCENE)
+    assert groups(out) == [[1, 2, 3], [4, 5], [6]]
+    assert out.nodes[4].parent is None and out.nodes[4].joint is None
+    assert out.nodes[5] == s.nodes[5]  # the model's joint inside the kettle is kept
+
+
+def test_a_rigid_lid_stays_with_its_item_and_a_cut_part_hangs_from_its_own_object() -> None:
+    # The lid was wired, with its hinge, to the bucket on the floor: it is cut from there and hung,
+    # joint and all, from the kettle (the nearest part of its own object).
+    s = structure({1: None, 2: 1, 3: 1, 4: None, 5: 6, 6: None}, {5: HINGE})
+    out = regroup(s, TABLE_SCENE)
+    assert groups(out) == [[1, 2, 3], [4, 5], [6]]
+    assert out.nodes[5] == Node(4, 0, HINGE)
+
+
+def test_one_tree_is_left_as_written_even_when_the_geometry_shows_several_objects() -> None:
+    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: 1})
+    assert regroup(s, TABLE_SCENE) is s
+    text = to_json(s)
+    assert regroup_text(text, TABLE_SCENE) == text
+
+
+def test_one_part_and_no_boxes() -> None:
+    one = structure({1: None})
+    assert regroup(one, {1: TABLE_SCENE[1]}) is one
+    assert object_groups({}) == []
+    two = structure({1: None, 2: None})
+    assert regroup(two, {}) is two
+
+
+def test_parts_that_all_touch_are_one_object_and_the_models_roots_are_joined() -> None:
+    # A cabinet whose door the model wrote as a second object: the boxes touch, so it is one object.
+    boxes = {1: box((-0.5, -0.3, -0.5), (0.5, 0.3, 0.5)), 2: box((-0.5, -0.32, -0.5), (0.0, -0.3, 0.5))}
+    assert object_groups(boxes) == [[1, 2]]
+    out = regroup(structure({1: None, 2: None}), boxes)
+    assert groups(out) == [[1, 2]] and out.nodes[2] == Node(1, 0)
+
+
+def test_identical_items_in_a_row_are_separate_objects() -> None:
+    boxes = {i: box((0.3 * i, -0.1, -0.5), (0.3 * i + 0.2, 0.1, -0.2)) for i in range(1, 5)}
+    s = structure({1: None, 2: 1, 3: 2, 4: None})
+    assert groups(regroup(s, boxes)) == [[1], [2], [3], [4]]
+
+
+def test_parts_without_boxes_follow_their_parent() -> None:
+    boxes = {k: v for k, v in TABLE_SCENE.items() if k != 5}
+    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: None})
+    out = regroup(s, boxes)
+    assert groups(out) == [[1, 2, 3], [4, 5], [6]]
+    # a box-less root is its own object, never attached anywhere
+    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: None, 6: 1})
+    assert groups(regroup(s, boxes)) == [[1, 2, 3], [4], [5], [6]]
+
+
+def test_a_knob_on_a_stove_top_is_not_an_item() -> None:
+    boxes = {1: box((-0.5, -0.3, -0.5), (0.5, 0.3, 0.4)), 2: box((-0.1, -0.05, 0.4), (0.0, 0.05, 0.42)),
+             3: box((0.6, -0.1, -0.5), (0.8, 0.1, -0.3))}
+    assert object_groups(boxes) == [[1, 2], [3]]
+
+
+@pytest.mark.parametrize("index", [0, 9, 12])
+def test_a_built_scene_with_its_objects_wired_together_gets_them_back(index: int) -> None:
+    scene = make_scene(0, index)[0]
+    boxes = {p: Box(tuple(round(v, 3) for v in b.centroid), tuple(round(v, 3) for v in b.extent))
+             for p, b in part_boxes(scene.parts).items()}
+    ref = scene.structure
+    roots = ref.roots()
+    assert len(roots) >= 3
+    # every object but the first two wired rigidly under the first one's root: the model's failure
+    wired = replace(ref, nodes={p: replace(n, parent=roots[0]) if p in roots[2:] else n for p, n in ref.nodes.items()})
+    assert groups(regroup(wired, boxes)) == groups(ref)
+    assert regroup(ref, boxes) == ref
+
+
+def test_a_valid_structure_never_becomes_invalid() -> None:
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        n = int(rng.integers(1, 12))
+        lo = rng.uniform(-0.5, 0.4, size=(n, 3)).round(3)
+        hi = (lo + rng.uniform(0.0, 0.3, size=(n, 3))).round(3)
+        boxes = {i + 1: box(tuple(lo[i]), tuple(hi[i])) for i in range(n) if rng.random() < 0.9}
+        parents: dict[int, int | None] = {}
+        for i in range(1, n + 1):
+            parents[i] = int(rng.integers(1, i)) if i > 1 and rng.random() < 0.7 else None
+        joints = {i: HINGE for i in parents if parents[i] is not None and rng.random() < 0.4}
+        s = structure(parents, joints)
+        out = regroup(s, boxes)
+        assert validate(json.loads(to_json(out)), part_ids=range(1, n + 1)) == []
+        assert regroup(out, boxes) == out  # applying it twice changes nothing more
+        legend = {i: boxes.get(i, Box((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))) for i in range(1, n + 1)}
+        assert parse_structure(regroup_text(to_json(s), legend), part_ids=range(1, n + 1))
+
+
+def test_a_text_that_is_not_a_valid_document_passes_through() -> None:
+    for text in ("", "not json", '{"nodes": {"1": {"parent": 2}}}', to_json(structure({1: None, 2: None}))[:-3]):
+        assert regroup_text(text, TABLE_SCENE) == text
