@@ -39,11 +39,11 @@ CONTACT_TOLERANCE = 0.004
 decimals (up to 0.001 off per centroid and per half extent); the gaps the scene builder leaves
 between objects (5 cm, 2.5 cm between items on one top) are 0.006 nu or more in a 4 m scene."""
 
-FOOTPRINT_SHARE = 1.0
+FOOTPRINT_SHARE = 0.9
 """An item's footprint covers at most this share of the top it stands on; a lid or a table top
 covers all of what holds it (and is part of that object)."""
 
-HEIGHT_SHARE = 0.05
+HEIGHT_SHARE = 0.02
 """An item is at least this share of the height of what it stands on (a knob on a stove is not)."""
 
 JOINT_REACH = 0.06

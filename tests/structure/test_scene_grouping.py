@@ -105,7 +105,7 @@ def test_parts_without_boxes_follow_their_parent() -> None:
 
 
 def test_a_knob_on_a_stove_top_is_not_an_item() -> None:
-    boxes = {1: box((-0.5, -0.3, -0.5), (0.5, 0.3, 0.4)), 2: box((-0.1, -0.05, 0.4), (0.0, 0.05, 0.42)),
+    boxes = {1: box((-0.5, -0.3, -0.5), (0.5, 0.3, 0.4)), 2: box((-0.1, -0.05, 0.4), (0.0, 0.05, 0.412)),
              3: box((0.6, -0.1, -0.5), (0.8, 0.1, -0.3))}
     assert object_groups(boxes) == [[1, 2], [3]]
 
