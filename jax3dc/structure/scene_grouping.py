@@ -30,6 +30,7 @@ from dataclasses import replace
 import numpy as np
 
 from jax3dc.errors import StructureError
+from jax3dc.structure.canonical import reroot
 from jax3dc.structure.schema import Box, Node, Structure
 from jax3dc.structure.serialize import to_dict
 from jax3dc.structure.validate import parse_structure
@@ -180,12 +181,17 @@ def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float =
 
 
 def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> Structure:
-    """``structure`` with one tree per object of ``object_of_parts`` (see the module docstring)."""
+    """``structure`` with one tree per object of ``object_of_parts`` (see the module docstring).
+
+    A part cut from a parent in another object keeps the joint the model wrote on it where it can:
+    hung from another piece of its own object, or, heading its object's only piece, with its
+    object re-rooted at its largest other part (the joint is the part's motion against the rest of
+    its object: a globe's stand wired with its hinge to the table turns against its globe)."""
     if len(structure.roots()) < 2:
         return structure
     label = object_of_parts(structure, boxes, tol)
     nodes = dict(structure.nodes)
-    loose: dict[int, bool] = {}  # local root -> whether it was cut from a parent (keeps its joint)
+    loose: dict[int, bool] = {}  # local root -> whether it was cut from a parent
     for pid, node in nodes.items():
         if node.parent is None:
             loose[pid] = False
@@ -194,28 +200,31 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
             nodes[pid] = replace(node, parent=None, joint=None)
     if not any(loose.values()) and len({label[r] for r in loose}) == len(loose):
         return structure
+
     def root_of(pid: int) -> int:
         while nodes[pid].parent is not None:
             pid = nodes[pid].parent
         return pid
 
+    def volume(pid: int) -> float:
+        return boxes[pid].volume if pid in boxes else -1.0
+
     tree = {pid: root_of(pid) for pid in nodes}  # part -> its local root
     for obj in sorted(set(label.values())):
         roots = sorted(r for r in loose if label[r] == obj)
-        if len(roots) < 2:
-            continue
         members = {r: sorted(p for p in nodes if tree[p] == r) for r in roots}
-
-        def size(r: int) -> float:
-            return max((boxes[p].volume for p in members[r] if p in boxes), default=0.0)
-
-        main = max(roots, key=lambda r: (size(r), -r))
+        size = {r: max(volume(p) for p in members[r]) for r in roots}
+        main = max(roots, key=lambda r: (size[r], -r))
         placed = set(members[main])
-        for r in sorted((r for r in roots if r != main), key=lambda r: (-size(r), r)):
+        for r in sorted((r for r in roots if r != main), key=lambda r: (-size[r], r)):
             host = min(placed, key=lambda p: (_gap(boxes[p], boxes[r]) if p in boxes and r in boxes else np.inf, p))
-            old = structure.nodes[r]
-            nodes[r] = replace(nodes[r], parent=host, joint=old.joint if loose[r] else None)
+            nodes[r] = replace(nodes[r], parent=host, joint=structure.nodes[r].joint if loose[r] else None)
             placed.update(members[r])
+        joint = structure.nodes[main].joint if loose[main] else None
+        others = sorted(p for p in placed - {main} if p in boxes)  # a part without a box is never a root
+        if joint is not None and others:
+            reroot(nodes, max(others, key=volume))
+            nodes[main] = replace(nodes[main], joint=joint)
     return replace(structure, nodes=nodes)
 
 
