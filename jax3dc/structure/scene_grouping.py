@@ -7,18 +7,22 @@ objects). This step reads the object partition from the legend boxes and fixes t
 
 1. **Bodies**: parts whose boxes touch (gap at most ``tol`` on every axis) are joined; each
    connected set is one body.
-2. **Supports**: inside a body, a horizontal plane with every part wholly above or wholly below it
-   and the upper parts resting on the lower ones only inside the top face of one supporting part
-   (their footprint smaller than that face) separates an item from what it stands on; repeated.
-3. **Regrouping**: a parent edge between parts of different objects is cut; within one object the
-   model's edges are kept, and a piece left without its parent hangs, rigidly or with the joint it
-   had, from the nearest part of its object outside its own subtree.
+2. **Supports**: inside a body, the lowest horizontal plane with every part wholly above or wholly
+   below it, where each upper piece stands inside the top face of one lower part (footprint centre
+   inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at least ``HEIGHT_SHARE`` of
+   the lower side's), separates items from what they stand on. An item is not cut again (its lid
+   rests on its body); what is below may be.
+3. **The model's joints**: a joint the model wrote between parts of two bodies at most
+   ``JOINT_REACH`` apart keeps them in one object (a tray hanging under a desk top).
+4. **Regrouping**: a parent edge between parts of different objects is cut; within one object the
+   model's edges are kept, and a piece left without its parent hangs, with the joint it had, from
+   the nearest part of its object outside its own subtree.
 
 The step runs only where the model wrote several trees (it read a scene): a single object's parts
-need not touch (a toilet seat held over its bowl, knobs on a stove top), so geometry alone would
+need not touch (a lifted lid, a desk's keyboard tray, knobs on a stove top), so geometry alone would
 split it, and a structure of one tree is left exactly as written. Parts the legend gives no box
-are left where the model put them. The result is always a valid structure
-when the input is: ids, materials and relations are kept, every cut leaves a forest.
+follow their parent. A valid structure stays valid: ids, materials and relations are kept, and
+every cut leaves a forest.
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import numpy as np
 
 from jax3dc.errors import StructureError
 from jax3dc.structure.canonical import reroot
-from jax3dc.structure.schema import Box, Node, Structure
+from jax3dc.structure.schema import Box, Structure
 from jax3dc.structure.serialize import to_dict
 from jax3dc.structure.validate import parse_structure
 
@@ -82,46 +86,36 @@ def _touching(lo: np.ndarray, hi: np.ndarray, tol: float) -> np.ndarray:
     return (gap <= tol).all(axis=-1)
 
 
-def _overlap_area(lo_a: np.ndarray, hi_a: np.ndarray, lo_b: np.ndarray, hi_b: np.ndarray) -> float:
-    side = np.minimum(hi_a[:2], hi_b[:2]) - np.maximum(lo_a[:2], lo_b[:2])
-    return float(np.prod(np.clip(side, 0.0, None)))
-
-
 def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float) -> list[list[int]] | None:
-    """The body ``ids`` cut at the lowest plane where items rest on a top face, or None."""
+    """The body ``ids`` cut at the lowest plane where items stand on a top face (step 2): the items
+    (connected upper pieces) then the rest, or None."""
+    row = {pid: k for k, pid in enumerate(ids)}
     for z in sorted(set(np.round(hi[:, 2], 6))):
-        above = lo[:, 2] >= z - tol
-        below = hi[:, 2] <= z + tol
-        if not (above | below).all() or not above.any() or (above & below).all():
-            continue
+        above, below = lo[:, 2] >= z - tol, hi[:, 2] <= z + tol
         upper = above & ~below
         lower = ~upper
-        if not upper.any() or not lower.any():
+        if not (above | below).all() or not upper.any() or not lower.any():
             continue
-        up_ids = [i for i, u in zip(ids, upper) if u]
-        pieces = _components(up_ids, _touching(lo[upper], hi[upper], tol))
-        index = {pid: k for k, pid in enumerate(ids)}
-        ok = True
-        for piece in pieces:
-            rows = [index[p] for p in piece]
-            plo, phi = lo[rows].min(axis=0), hi[rows].max(axis=0)
-            if plo[2] > z + tol:  # touches the lower parts only through other upper parts: not resting here
-                ok = False
-                break
-            area = float(np.prod(np.clip(phi[:2] - plo[:2], 0.0, None)))
-            centre = (plo[:2] + phi[:2]) / 2
-            if phi[2] - plo[2] < HEIGHT_SHARE * (hi[lower, 2].max() - lo[lower, 2].min()):
-                ok = False  # a knob or a cushion on its own object's top, not an item standing there
-                break
-            host = [k for k in np.nonzero(lower)[0] if abs(hi[k, 2] - z) <= tol
-                    and (lo[k, :2] <= centre).all() and (centre <= hi[k, :2]).all()
-                    and area <= FOOTPRINT_SHARE * float(np.prod(hi[k, :2] - lo[k, :2]))]
-            if not host:
-                ok = False
-                break
-        if ok:
-            return [up for up in pieces] + [[i for i, low in zip(ids, lower) if low]]
+        lower_height = hi[lower, 2].max() - lo[lower, 2].min()
+        pieces = _components([i for i, u in zip(ids, upper) if u], _touching(lo[upper], hi[upper], tol))
+        if all(_stands_on(lo[[row[p] for p in piece]].min(axis=0), hi[[row[p] for p in piece]].max(axis=0),
+                          lo[lower], hi[lower], z, lower_height, tol) for piece in pieces):
+            return pieces + [[i for i, low in zip(ids, lower) if low]]
     return None
+
+
+def _stands_on(plo: np.ndarray, phi: np.ndarray, lo: np.ndarray, hi: np.ndarray, z: float, lower_height: float,
+               tol: float) -> bool:
+    """Whether the piece of box (plo, phi) stands at height ``z`` on the top face of one of the
+    boxes (lo, hi) as an item does (module docstring, step 2)."""
+    if plo[2] > z + tol:  # it reaches the lower parts only through other upper parts
+        return False
+    if phi[2] - plo[2] < HEIGHT_SHARE * lower_height:  # a knob on its own object's top
+        return False
+    centre = (plo[:2] + phi[:2]) / 2
+    area = float(np.prod(phi[:2] - plo[:2]))
+    tops = (np.abs(hi[:, 2] - z) <= tol) & (lo[:, :2] <= centre).all(axis=1) & (centre <= hi[:, :2]).all(axis=1)
+    return bool((tops & (area <= FOOTPRINT_SHARE * np.prod(hi[:, :2] - lo[:, :2], axis=1))).any())
 
 
 def bodies(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[list[int]]:
@@ -156,9 +150,8 @@ def _gap(a: Box, b: Box) -> float:
 
 def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> dict[int, int]:
     """Part id -> object label: geometric objects (``object_groups``) joined where the model put a
-    joint between two parts within ``JOINT_REACH`` of each other (a lid on its kettle, a drawer
-    hanging under a desk's top), so only rigid attachments the geometry contradicts are cut. A part
-    without a box takes its parent's label (a root without a box is its own object)."""
+    joint between parts of two bodies at most ``JOINT_REACH`` apart (step 3). A part without a box
+    takes its parent's label (a root without a box is its own object)."""
     boxed = {p: boxes[p] for p in structure.nodes if p in boxes}
     label = {p: k for k, group in enumerate(object_groups(boxed, tol)) for p in group}
     body = {p: k for k, group in enumerate(bodies(boxed, tol)) for p in group}
