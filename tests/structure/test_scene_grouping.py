@@ -146,3 +146,39 @@ def test_a_valid_structure_never_becomes_invalid() -> None:
 def test_a_text_that_is_not_a_valid_document_passes_through() -> None:
     for text in ("", "not json", '{"nodes": {"1": {"parent": 2}}}', to_json(structure({1: None, 2: None}))[:-3]):
         assert regroup_text(text, TABLE_SCENE) == text
+
+
+@pytest.mark.parametrize("grouping", [True, False])
+def test_the_sampler_regroups_what_the_model_wrote_unless_told_not_to(monkeypatch, grouping: bool) -> None:
+    """The one decode path of eval run and predict: a reply that wires the kettle to the table comes
+    back with the kettle as its own object (and untouched with scene_grouping off)."""
+    import io
+    from types import SimpleNamespace
+
+    from PIL import Image
+
+    import jax3dc.sampler as sampler_module
+    from jax3dc.prompt import LEGEND_HEADER, legend_line
+    from jax3dc.sampler import DecodeOptions, Prompt, Sampler
+    from jax3dc.structure.box_frame import PivotFrame
+
+    reply = to_json(structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: None}, {5: HINGE}))
+    png = io.BytesIO()
+    Image.new("RGB", (32, 32)).save(png, format="PNG")
+    prompt_text = "\n".join([LEGEND_HEADER] + [legend_line(p, (10, 20, 30), b) for p, b in TABLE_SCENE.items()])
+    record = SimpleNamespace(key="scene", image_png=png.getvalue(), seg_png=png.getvalue(), prompt=prompt_text)
+    special = SimpleNamespace(endoftext=0, stop_ids=(1,))
+    tokenizer = SimpleNamespace(special=special, decode=lambda ids: reply + ("<stop>" if ids[-1:] == [1] else ""))
+    config = SimpleNamespace(text=SimpleNamespace(max_position_embeddings=64, vocab_size=8))
+    monkeypatch.setattr(sampler_module, "preprocess_images",
+                        lambda images, processor: SimpleNamespace(pixel_values=np.zeros((1, 1)),
+                                                                  image_grid_thw=np.ones((1, 3), dtype=np.int64)))
+    monkeypatch.setattr(sampler_module, "prefill", lambda *args, **kwargs: None)
+    monkeypatch.setattr(sampler_module, "decode", lambda *args, **kwargs: SimpleNamespace(
+        tokens=np.array([[5, 1]]), lengths=np.array([2]), logprobs=np.array([0.0])))
+    sampler = Sampler(None, config, tokenizer, None, PivotFrame())
+    sample = sampler.generate_batch([Prompt("scene", np.array([3, 4]), record)], 1, 2, 1,
+                                    DecodeOptions(constrained=False, scene_grouping=grouping))[0][0]
+    written = parse_structure(sample.reply, part_ids=TABLE_SCENE)
+    assert groups(written) == ([[1, 2, 3], [4, 5], [6]] if grouping else [[1, 2, 3, 4, 5], [6]])
+    assert sample.text == sample.reply + "<stop>"
