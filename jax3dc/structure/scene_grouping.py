@@ -10,8 +10,9 @@ objects). This step reads the object partition from the legend boxes and fixes t
 2. **Supports**: inside a body, the lowest horizontal plane with every part wholly above or wholly
    below it, where each upper piece stands inside the top face of one lower part (footprint centre
    inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at least ``HEIGHT_SHARE`` of
-   the lower side's), separates items from what they stand on. An item is not cut again (its lid
-   rests on its body); what is below may be.
+   the lower side's, and the lower side at least ``HOST_SHARE`` of the scene's height), separates
+   items from the furniture they stand on. An item is not cut again (its lid rests on its body);
+   what is below may be.
 3. **The model's joints**: a joint the model wrote between parts of two bodies at most
    ``JOINT_REACH`` apart keeps them in one object (a tray hanging under a desk top).
 4. **Regrouping**: a parent edge between parts of different objects is cut; within one object the
@@ -51,6 +52,10 @@ covers all of what holds it (and is part of that object)."""
 HEIGHT_SHARE = 0.02
 """An item is at least this share of the height of what it stands on (a knob on a stove is not)."""
 
+HOST_SHARE = 0.3
+"""What items stand on is furniture, at least this share of the scene's height; a fan's head on its
+stand, or a lid on a kettle, both on the floor beside a table, are parts of one item."""
+
 JOINT_REACH = 0.06
 """nu: a joint the model writes between two parts at most this far apart keeps them in one object
 (a drawer or tray hangs from its parent with a small clearance); farther, it is an error."""
@@ -86,7 +91,8 @@ def _touching(lo: np.ndarray, hi: np.ndarray, tol: float) -> np.ndarray:
     return (gap <= tol).all(axis=-1)
 
 
-def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float) -> list[list[int]] | None:
+def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float,
+                   scene_height: float) -> list[list[int]] | None:
     """The body ``ids`` cut at the lowest plane where items stand on a top face (step 2): the items
     (connected upper pieces) then the rest, or None."""
     row = {pid: k for k, pid in enumerate(ids)}
@@ -97,6 +103,8 @@ def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float) -
         if not (above | below).all() or not upper.any() or not lower.any():
             continue
         lower_height = hi[lower, 2].max() - lo[lower, 2].min()
+        if lower_height < HOST_SHARE * scene_height:
+            continue
         pieces = _components([i for i, u in zip(ids, upper) if u], _touching(lo[upper], hi[upper], tol))
         if all(_stands_on(lo[[row[p] for p in piece]].min(axis=0), hi[[row[p] for p in piece]].max(axis=0),
                           lo[lower], hi[lower], z, lower_height, tol) for piece in pieces):
@@ -124,20 +132,24 @@ def bodies(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[lis
     return _components(ids, _touching(lo, hi, tol))
 
 
-def object_groups(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[list[int]]:
+def object_groups(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE,
+                  scene_height: float | None = None) -> list[list[int]]:
     """The parts of each physical object (sorted lists, ordered by smallest id) from their boxes."""
     if not boxes:
         return []
+    if scene_height is None:
+        _, lo, hi = _corners(boxes, boxes)
+        scene_height = float(hi[:, 2].max() - lo[:, 2].min())
     done: list[list[int]] = []
     for body in bodies(boxes, tol):
         b_ids, b_lo, b_hi = _corners(boxes, body)
-        pieces = _support_split(b_ids, b_lo, b_hi, tol) if len(body) > 1 else None
+        pieces = _support_split(b_ids, b_lo, b_hi, tol, scene_height) if len(body) > 1 else None
         if pieces is None:
             done.append(b_ids)
             continue
         *items, rest = pieces  # an item is not cut again: its lid rests on its body
         done.extend(items)
-        done.extend(object_groups({p: boxes[p] for p in rest}, tol))
+        done.extend(object_groups({p: boxes[p] for p in rest}, tol, scene_height))
     return sorted(done, key=lambda g: g[0])
 
 

@@ -182,3 +182,13 @@ def test_the_sampler_regroups_what_the_model_wrote_unless_told_not_to(monkeypatc
     written = parse_structure(sample.reply, part_ids=TABLE_SCENE)
     assert groups(written) == ([[1, 2, 3], [4, 5], [6]] if grouping else [[1, 2, 3, 4, 5], [6]])
     assert sample.text == sample.reply + "<stop>"
+
+
+def test_a_fans_head_on_its_stand_beside_a_table_is_not_an_item() -> None:
+    # Stand 7 and head 8 of a fan on the floor: the head stands inside the stand's top face as an
+    # item would, but what holds it is far lower than the table a real item stands on.
+    boxes = {**{k: TABLE_SCENE[k] for k in (1, 2, 3)}, 7: box((0.3, -0.1, -0.5), (0.5, 0.1, -0.4)),
+             8: box((0.35, -0.05, -0.4), (0.45, 0.05, -0.3))}
+    assert object_groups(boxes) == [[1, 2, 3], [7, 8]]
+    s = structure({1: None, 2: 1, 3: 1, 7: 1, 8: None})
+    assert groups(regroup(s, boxes)) == [[1, 2, 3], [7, 8]]
