@@ -103,7 +103,8 @@ def run_eval(args: argparse.Namespace) -> int:
         generator = Sampler.load(args.checkpoint, dtype=args.dtype)
         options = DecodeOptions(constrained=not args.unconstrained, candidates=args.candidates,
                                 temperature=args.temperature, top_p=args.top_p, seed=args.seed,
-                                grounding=Grounding() if args.ground_joints else None)
+                                grounding=Grounding() if args.ground_joints else None,
+                                scene_grouping=args.scene_grouping)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
                                             args.max_new_tokens, args.bucket, options)
         notes.append(("constrained" if options.constrained else "unconstrained") + f" decoding, {options.candidates} "
@@ -231,6 +232,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="correct each decoded joint's type, axis and hinge line with the part boxes of the legend "
                      "(jax3dc.grounding; off by default: on the release-3 benchmark it did not raise held-out real success, "
                      "see docs/runs/grounding_20261128)")
+    run.add_argument("--scene-grouping", action=argparse.BooleanOptionalAction, default=True,
+                     help="where the model wrote several trees (a scene), cut each parent edge the legend boxes show "
+                     "to join two separate objects, and hang a piece left without its parent from its own object "
+                     "(jax3dc.structure.scene_grouping; default: on)")
     run.add_argument("--temperature", type=positive_float, default=0.8, help="sampling temperature of candidates 2..K (default 0.8)")
     run.add_argument("--top-p", type=positive_float, default=0.95, help="nucleus of candidates 2..K (default 0.95)")
     run.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")

@@ -43,6 +43,7 @@ from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images,
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.prompt import IMAGES_PER_TASK, chat_messages, code_messages, legend_boxes, parameters_messages
 from jax3dc.structure.box_frame import PivotFrame, text_to_absolute
+from jax3dc.structure.scene_grouping import regroup_text
 
 
 class Example(Protocol):
@@ -87,6 +88,9 @@ class DecodeOptions:
     temperature: float = 0.8  # for the sampled candidates
     top_p: float = 0.95
     seed: int = 0
+    # Structures: a parent edge the legend boxes show to join two separate objects of a scene is cut
+    # (jax3dc.structure.scene_grouping); only where the model wrote several trees.
+    scene_grouping: bool = True
     # The parameters task's grammar is built from the factories' schemas (category -> Schema): the
     # caller passes them (jax3dc.factories.registry.SCHEMAS).
     schemas: Any = None
@@ -224,14 +228,17 @@ class Sampler:
             text, reply = self.tokenizer.decode(tokens[i, :n].tolist()), self.tokenizer.decode(tokens[i, :n - stopped].tolist())
             if boxes is not None:
                 text, reply = (text_to_absolute(t, boxes, self.pivot_frame) for t in (text, reply))
+                if options.scene_grouping:
+                    text, reply = (regroup_text(t, boxes) for t in (text, reply))
                 if options.grounding is not None:
                     text, reply = (ground_text(t, boxes, options.grounding) for t in (text, reply))
             return Sample(text, n, stopped, float(logprobs[i]), reply)
 
         def pivot_boxes(prompt: Prompt) -> dict | None:
-            """The legend boxes box-frame pivots are read against and joints are grounded in, parsed
-            once for the prompt's K rows."""
-            if prompt.task != "structure" or (self.pivot_frame.name == "absolute" and options.grounding is None):
+            """The legend boxes box-frame pivots are read against, objects are grouped by and joints
+            are grounded in, parsed once for the prompt's K rows."""
+            if prompt.task != "structure" or (self.pivot_frame.name == "absolute" and not options.scene_grouping
+                                              and options.grounding is None):
                 return None
             return legend_boxes(prompt.record.prompt)
 

@@ -1,0 +1,126 @@
+"""Scene grouping (``jax3dc.structure.scene_grouping``) measured on predictions already made.
+
+    python3 -m bench.scene_grouping --bench runs/r3/bench --out runs/r3/grouping
+    python3 -m bench.real_objects --score-only --out runs/r3/grouping --model grouped --compare raw
+
+The greedy predictions of a ``bench.real_objects`` folder were decoded without the step; this
+applies it to each line exactly as the sampler does after decoding (``regroup_text`` with the
+record's legend boxes), and lays out OUT as a ``bench.real_objects`` folder (OUT/model: grouped,
+OUT/compare: raw, the sets and baselines linked), so ``--score-only`` prints raw and grouped side
+by side on every set. Lines whose key is in no set are dropped; changed keys go to OUT/changed.txt.
+
+    python3 -m bench.scene_grouping --built-scenes 200
+
+measures the step without a model: the first N scenes of a `data build --scenes N` (seed 0, no
+rendering), their objects wired together as a model does it (each object root but the first two
+hung rigidly from a random part of another object), regrouped from legend-rounded boxes; it prints
+the share of scenes whose object partition comes back whole, per split and granularity (the
+thresholds were set on the train split).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+from collections import Counter
+from dataclasses import replace
+from pathlib import Path
+from typing import Iterable
+
+from data_pipeline.shards import shard_paths
+from eval.records import read_records
+from jax3dc.prompt import legend_boxes
+from jax3dc.structure import Box, Structure
+from jax3dc.structure.scene_grouping import regroup, regroup_text
+
+
+def legend_of_sets(sets: Path) -> dict[str, dict]:
+    """Record key -> its legend boxes, over every set of a bench folder."""
+    return {r.key: legend_boxes(r.prompt) for folder in sorted(sets.iterdir())
+            if (folder / "manifest.json").exists() for r in read_records(shard_paths([str(folder)], None))}
+
+
+def partition(s: Structure) -> list[list[int]]:
+    """The parts of each tree, as sorted lists."""
+    top = {}
+    for p in s.nodes:
+        q = p
+        while s.nodes[q].parent is not None:
+            q = s.nodes[q].parent
+        top[p] = q
+    return sorted(sorted(p for p in s.nodes if top[p] == r) for r in set(top.values()))
+
+
+def built_scenes(count: int) -> Counter:
+    """(split, granularity, outcome) counts over the first ``count`` built scenes (module docstring)."""
+    from data_pipeline.samples import derived_rng, split_of
+    from data_pipeline.scenes import make_scene
+    from jax3dc.geometry.parts import part_boxes
+
+    out: Counter = Counter()
+    for index in range(count):
+        for scene in make_scene(0, index):
+            boxes = {p: Box(tuple(round(v, 3) for v in b.centroid), tuple(round(v, 3) for v in b.extent))
+                     for p, b in part_boxes(scene.parts).items()}
+            ref, rng = scene.structure, derived_rng("wired", index, scene.granularity)
+            roots, nodes = ref.roots(), dict(ref.nodes)
+            for r in roots[2:]:
+                others = sorted(set(nodes) - replace(ref, nodes=nodes).subtree(r))
+                nodes[r] = replace(nodes[r], parent=int(rng.choice(others)))
+            wired = replace(ref, nodes=nodes)
+            where = (split_of(scene.object_id), scene.granularity)
+            out[(*where, "scenes")] += 1
+            out[(*where, "wired")] += partition(wired) == partition(ref)
+            out[(*where, "regrouped")] += partition(regroup(wired, boxes)) == partition(ref)
+            out[(*where, "reference kept")] += partition(regroup(ref, boxes)) == partition(ref)
+    return out
+
+
+def main(argv: Iterable[str] | None = None) -> list[str]:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--bench", help="a bench.real_objects output folder (sets/, model/)")
+    p.add_argument("--out", help="folder to write (a bench.real_objects folder for --score-only)")
+    p.add_argument("--built-scenes", type=int, default=0, metavar="N", help="measure on N built scenes instead")
+    a = p.parse_args(None if argv is None else list(argv))
+    if a.built_scenes:
+        counts = built_scenes(a.built_scenes)
+        for split, granularity in sorted({k[:2] for k in counts}):
+            n = counts[(split, granularity, "scenes")]
+            print(f"{split:5s} {granularity:6s} {n:4d} scenes, whole object partition: "
+                  + ", ".join(f"{what} {100.0 * counts[(split, granularity, what)] / n:.1f}%"
+                              for what in ("wired", "regrouped", "reference kept")))
+        return []
+    if not (a.bench and a.out):
+        p.error("--bench and --out are needed (or --built-scenes N)")
+    bench, out = Path(a.bench), Path(a.out)
+    boxes = legend_of_sets(bench / "sets")
+    for label in ("model", "compare"):
+        (out / label).mkdir(parents=True, exist_ok=True)
+        shutil.copy(bench / "model" / "references.jsonl", out / label / "references.jsonl")
+    for name in ("sets", "baselines"):
+        if (bench / name).exists() and not (out / name).exists():
+            (out / name).symlink_to((bench / name).resolve())
+    changed = []
+    with (bench / "model" / "predictions.jsonl").open(encoding="utf-8") as f, \
+            (out / "model" / "predictions.jsonl").open("w", encoding="utf-8") as grouped, \
+            (out / "compare" / "predictions.jsonl").open("w", encoding="utf-8") as raw:
+        for line in f:
+            try:
+                item = json.loads(line)
+            except json.JSONDecodeError:  # the torn last line of a run still writing
+                continue
+            if item.get("key") not in boxes:
+                continue
+            raw.write(json.dumps(item, separators=(",", ":")) + "\n")
+            text = regroup_text(item["text"], boxes[item["key"]])
+            if text != item["text"]:
+                changed.append(item["key"])
+            grouped.write(json.dumps({**item, "text": text}, separators=(",", ":")) + "\n")
+    (out / "changed.txt").write_text("".join(k + "\n" for k in changed))
+    print(f"{len(changed)} predictions regrouped; wrote {out}")
+    return changed
+
+
+if __name__ == "__main__":
+    main()
