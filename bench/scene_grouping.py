@@ -9,6 +9,11 @@ record's legend boxes), and lays out OUT as a ``bench.real_objects`` folder (OUT
 OUT/compare: raw, the sets and baselines linked), so ``--score-only`` prints raw and grouped side
 by side on every set. Lines whose key is in no set are dropped; changed keys go to OUT/changed.txt.
 
+    python3 -m bench.scene_grouping --predictions RAW.jsonl --data SHARDS --out GROUPED.jsonl
+
+applies it to one predictions file of `jax3dc eval run --no-scene-grouping` over SHARDS (every split),
+for `jax3dc eval run --predictions GROUPED.jsonl` to score beside the raw run.
+
     python3 -m bench.scene_grouping --built-scenes 200
 
 measures the step without a model: the first N scenes of a `data build --scenes N` (seed 0, no
@@ -77,12 +82,41 @@ def built_scenes(count: int) -> Counter:
     return out
 
 
+def regroup_file(predictions: Path, boxes: dict[str, dict], out: Path) -> list[str]:
+    """Writes ``predictions`` to ``out`` with each line regrouped as the sampler does; returns the
+    keys whose text changed. Lines whose key has no legend are dropped (they are in no set)."""
+    changed = []
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with predictions.open(encoding="utf-8") as f, out.open("w", encoding="utf-8") as grouped:
+        for line in f:
+            try:
+                item = json.loads(line)
+            except json.JSONDecodeError:  # the torn last line of a run still writing
+                continue
+            if item.get("key") not in boxes:
+                continue
+            text = regroup_text(item["text"], boxes[item["key"]])
+            if text != item["text"]:
+                changed.append(item["key"])
+            grouped.write(json.dumps({**item, "text": text}, separators=(",", ":")) + "\n")
+    return changed
+
+
 def main(argv: Iterable[str] | None = None) -> list[str]:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--bench", help="a bench.real_objects output folder (sets/, model/)")
     p.add_argument("--out", help="folder to write (a bench.real_objects folder for --score-only)")
     p.add_argument("--built-scenes", type=int, default=0, metavar="N", help="measure on N built scenes instead")
+    p.add_argument("--predictions", help="one predictions JSONL to regroup (with --data and --out FILE)")
+    p.add_argument("--data", nargs="+", default=[], help="the shards --predictions was made on (every split)")
     a = p.parse_args(None if argv is None else list(argv))
+    if a.predictions:
+        if not (a.data and a.out):
+            p.error("--predictions needs --data and --out")
+        boxes = {r.key: legend_boxes(r.prompt) for r in read_records(shard_paths(a.data, None))}
+        changed = regroup_file(Path(a.predictions), boxes, Path(a.out))
+        print(f"{len(changed)} predictions regrouped; wrote {a.out}")
+        return changed
     if a.built_scenes:
         counts = built_scenes(a.built_scenes)
         for split, granularity in sorted({k[:2] for k in counts}):
@@ -101,22 +135,16 @@ def main(argv: Iterable[str] | None = None) -> list[str]:
     for name in ("sets", "baselines"):
         if (bench / name).exists() and not (out / name).exists():
             (out / name).symlink_to((bench / name).resolve())
-    changed = []
     with (bench / "model" / "predictions.jsonl").open(encoding="utf-8") as f, \
-            (out / "model" / "predictions.jsonl").open("w", encoding="utf-8") as grouped, \
             (out / "compare" / "predictions.jsonl").open("w", encoding="utf-8") as raw:
         for line in f:
             try:
                 item = json.loads(line)
-            except json.JSONDecodeError:  # the torn last line of a run still writing
+            except json.JSONDecodeError:
                 continue
-            if item.get("key") not in boxes:
-                continue
-            raw.write(json.dumps(item, separators=(",", ":")) + "\n")
-            text = regroup_text(item["text"], boxes[item["key"]])
-            if text != item["text"]:
-                changed.append(item["key"])
-            grouped.write(json.dumps({**item, "text": text}, separators=(",", ":")) + "\n")
+            if item.get("key") in boxes:
+                raw.write(json.dumps(item, separators=(",", ":")) + "\n")
+    changed = regroup_file(bench / "model" / "predictions.jsonl", boxes, out / "model" / "predictions.jsonl")
     (out / "changed.txt").write_text("".join(k + "\n" for k in changed))
     print(f"{len(changed)} predictions regrouped; wrote {out}")
     return changed
