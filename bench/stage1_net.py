@@ -2,8 +2,9 @@
 
     nice -n 10 python3 -m bench.stage1_net --out runs/stage1_net
 
-  1. data      `jax3dc data build` of --objects factory objects, one view, varied appearance, no
-               scenes, no augmentation (records carry their parameter text); skipped when complete
+  1. data      `jax3dc data build` per --objects count (build i: OUT/data-i, build seed i), one
+               view, varied appearance, no scenes, no augmentation (records carry their parameter
+               text); a complete build is kept
   2. train     jax3dc.stage1_net.Stage1Net on the train split (train.stage1_net: optax AdamW,
                shifted and brightness-jittered images), bounded by --steps and --minutes
   3. package   OUT/stage1 (stage1_net.json + float16 model.safetensors), its size printed
@@ -31,13 +32,13 @@ from PIL import Image
 from bench.release_model import _call
 
 
-def _load_split_images(data: Path, size: int) -> dict[str, tuple[list[str], list[np.ndarray], list[str]]]:
+def _load_split_images(folders: list[Path], size: int) -> dict[str, tuple[list[str], list[np.ndarray], list[str]]]:
     """split -> (keys, network images as uint8, parameter texts) of the records that carry parameters."""
     from data_pipeline.shards import read_dataset
     from jax3dc.stage1_net import network_image
 
     out: dict[str, tuple[list, list, list]] = defaultdict(lambda: ([], [], []))
-    for record in read_dataset(data):
+    for record in (r for folder in folders for r in read_dataset(folder)):
         if not record.parameters:
             continue
         rgb = np.asarray(Image.open(io.BytesIO(record.image_png)).convert("RGB"))
@@ -59,8 +60,9 @@ def main() -> None:
 
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/stage1_net")
-    p.add_argument("--data", default="", help="a built dataset to use instead of OUT/data")
-    p.add_argument("--objects", type=int, default=4000)
+    p.add_argument("--data", nargs="+", default=[], help="built datasets to use instead of building OUT/data")
+    p.add_argument("--objects", type=int, nargs="+", default=[4000, 7000],
+                   help="objects per build; build i (OUT/data-i) uses build seed i, so builds share no object")
     p.add_argument("--render-size", type=int, default=128, help="image side of the build")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--image-size", type=int, default=96, help="image side the network reads")
@@ -74,15 +76,16 @@ def main() -> None:
     a = p.parse_args()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    data = Path(a.data) if a.data else out / "data"
-
-    manifest = data / "manifest.json"
-    if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
-        _call(["data", "build", "--out", str(data), "--objects", str(a.objects), "--scenes", "0", "--views", "1",
-               "--size", str(a.render_size), "--workers", str(a.workers), "--appearance", "varied", "--quiet"])
+    folders = [Path(d) for d in a.data] or [out / f"data-{seed}" for seed in range(len(a.objects))]
+    for seed, (folder, objects) in enumerate(zip(folders, a.objects if not a.data else [])):
+        manifest = folder / "manifest.json"
+        if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
+            _call(["data", "build", "--out", str(folder), "--objects", str(objects), "--seed", str(seed), "--scenes", "0",
+                   "--views", "1", "--size", str(a.render_size), "--workers", str(a.workers), "--appearance", "varied",
+                   "--quiet"])
 
     t = time.perf_counter()
-    splits = _load_split_images(data, a.image_size)
+    splits = _load_split_images(folders, a.image_size)
     layout = OutputLayout.of(SCHEMAS)
     sets = {name: targets(images, texts, layout, SCHEMAS) for name, (_, images, texts) in splits.items()}
     print(f"[stage1_net] records: {({k: len(v) for k, v in sets.items()})} loaded in {time.perf_counter() - t:.0f} s",
@@ -97,7 +100,8 @@ def main() -> None:
     print(f"[stage1_net] trained {log[-1]['step']} steps in {train_s:.0f} s; held out: {held_out}", flush=True)
 
     package = out / "stage1"
-    recipe = f"nice -n 10 python3 -m bench.stage1_net --objects {a.objects} --steps {a.steps} --minutes {a.minutes}"
+    recipe = (f"nice -n 10 python3 -m bench.stage1_net --objects {' '.join(map(str, a.objects))} "
+              f"--image-size {a.image_size} --steps {a.steps} --minutes {a.minutes}")
     save_network(package, model, SCHEMAS, notes={"recipe": recipe, "train_records": len(sets["train"]),
                                                  "steps": log[-1]["step"]})
     weights = (package / "model.safetensors").stat().st_size

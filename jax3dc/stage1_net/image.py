@@ -13,6 +13,7 @@ from PIL import Image
 from jax3dc.errors import Jax3dcError
 
 MIN_SIDE = 16
+MIN_SPREAD = 2.0  # pixel standard deviation (0..255) below which an image shows nothing to read
 
 
 class ImageInputError(Jax3dcError):
@@ -20,7 +21,8 @@ class ImageInputError(Jax3dcError):
 
 
 def check_image(image: object) -> np.ndarray:
-    """``image`` if it is an RGB uint8 array of at least MIN_SIDE px a side; else ImageInputError."""
+    """``image`` if it is an RGB uint8 array of at least MIN_SIDE px a side that is not one flat
+    colour (a blank image has no object to read); else ImageInputError."""
     if not isinstance(image, np.ndarray):
         raise ImageInputError(f"stage-1 image: expected a numpy array, got {type(image).__name__}")
     if image.ndim != 3 or image.shape[2] != 3:
@@ -30,6 +32,8 @@ def check_image(image: object) -> np.ndarray:
     if min(image.shape[:2]) < MIN_SIDE:
         raise ImageInputError(f"stage-1 image: {image.shape[1]}x{image.shape[0]} px is too small "
                               f"(at least {MIN_SIDE} px a side)")
+    if float(image.std()) < MIN_SPREAD:
+        raise ImageInputError("stage-1 image: one flat colour, no object to read")
     return image
 
 

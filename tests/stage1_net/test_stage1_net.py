@@ -121,6 +121,7 @@ def test_weights_of_another_shape_name_the_tensor(tmp_path):
     (np.zeros((32, 32, 3), np.float32), "uint8"),
     (np.zeros((8, 300, 3), np.uint8), "too small"),
     ([[0, 0, 0]], "numpy array"),
+    (np.full((64, 64, 3), 128, np.uint8), "no object"),
 ])
 def test_an_unreadable_image_is_a_clear_error(image, problem):
     with pytest.raises(ImageInputError, match=problem):
