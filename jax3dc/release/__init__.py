@@ -4,6 +4,9 @@ Pretrained Qwen3-VL weights cannot be fetched at run time, so the package carrie
 stage-2 structure model (bf16, under 24 MiB; SPEC §7). `predict`, `eval run` and `demo` use this
 folder when no model folder is given. MODEL_CARD.md beside this file names its data, licence,
 training run and measured tables; release_summary.json holds the recipe's own figures.
+
+``stage1/`` holds the shipped stage-1 image network (jax3dc.stage1_net: image I -> a factory's
+category and parameters; ``bench/stage1_net.py``), with its own MODEL_CARD.md.
 """
 
 from __future__ import annotations
@@ -12,6 +15,10 @@ from pathlib import Path
 
 MODEL_DIR = Path(__file__).resolve().parent
 """An HF checkpoint folder (config.json, safetensors shards, tokenizer, processor config)."""
+
+
+STAGE1_DIR = MODEL_DIR / "stage1"
+"""A jax3dc.stage1_net folder (stage1_net.json, model.safetensors): ``load_reader(STAGE1_DIR)``."""
 
 
 def default_structure_model() -> Path:
