@@ -1,11 +1,9 @@
 """Stage-1 readers: image I in, a factory parameter text out (``jax3dc.parameters``), whatever model writes it.
 
 ``--stage1 parameters --stage1-model DIR`` hands the folder to ``load_reader``, which picks the kind
-of model by the marker file the folder holds (the first of ``READERS`` that matches). Another kind
-of model plugs in with one entry: e.g. a small image network whose folder holds
-``stage1_net.json`` and whose module exposes ``load_reader(folder)`` would be
-``ReaderKind("stage1_net.json", "a stage-1 image network", lambda folder, settings: module.load_reader(folder))``,
-placed before the language model's ``config.json`` (the more specific marker first).
+of model by the marker file the folder holds (the first of ``READERS`` that matches): the image
+network (``stage1_net.json``; the shipped one) before the language model's ``config.json``, the more
+specific marker first. Another kind of model plugs in with one entry.
 """
 
 from __future__ import annotations
@@ -17,6 +15,7 @@ from typing import Any, Callable
 import numpy as np
 
 from jax3dc.errors import InputFileError
+from jax3dc.stage1_net import load_reader as load_image_network
 
 Reader = Callable[[np.ndarray], str]
 """RGB uint8 image (H, W, 3) -> the one-line parameter text, e.g. ``stapler(length=0.31, ...)``."""
@@ -47,7 +46,13 @@ def _language_model(folder: Path, settings: ReaderSettings) -> Reader:
     return parameters_model(settings.sampler(folder), settings.max_new_tokens, settings.constrained)
 
 
+def _image_network(folder: Path, settings: ReaderSettings) -> Reader:
+    return load_image_network(folder)
+
+
 READERS: tuple[ReaderKind, ...] = (
+    ReaderKind("stage1_net.json", "a stage-1 image network (jax3dc.stage1_net), as bench/stage1_net.py "
+               "packages it", _image_network),
     ReaderKind("config.json", "a parameters language model: a Hugging Face folder, as the recipe "
                "bench/stage1_model.py packages it", _language_model),
 )

@@ -5,8 +5,9 @@ stage-2 structure model (bf16, under 24 MiB; SPEC §7). `predict`, `eval run` an
 folder when no model folder is given. MODEL_CARD.md beside this file names its data, licence,
 training run and measured tables; release_summary.json holds the recipe's own figures.
 
-A stage-1 model, when one ships, lives in ``stage1/`` beside it (``bench/stage1_model.py`` packages
-it): then ``predict IMAGE`` needs no ``--stage1``.
+``stage1/`` holds the shipped stage-1 image network (jax3dc.stage1_net: image I -> a factory's
+category and parameters; ``bench/stage1_net.py``), with its own MODEL_CARD.md: with it,
+``predict IMAGE`` needs no ``--stage1``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,10 @@ MODEL_DIR = Path(__file__).resolve().parent
 
 STAGE1_DIR = MODEL_DIR / "stage1"
 """The shipped stage-1 model's folder (image I -> factory parameters), absent until one ships."""
+
+
+STAGE1_DIR = MODEL_DIR / "stage1"
+"""A jax3dc.stage1_net folder (stage1_net.json, model.safetensors): ``load_reader(STAGE1_DIR)``."""
 
 
 def default_structure_model() -> Path:

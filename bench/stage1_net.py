@@ -1,0 +1,139 @@
+"""The stage-1 image network's recipe on CPU (issue 49): build, train, package, score on test.
+
+    nice -n 10 python3 -m bench.stage1_net --out runs/stage1_net
+
+  1. data      `jax3dc data build` per --objects count (build i: OUT/data-i, build seed i), one
+               view, varied appearance, no scenes, no augmentation (records carry their parameter
+               text); a complete build is kept
+  2. train     jax3dc.stage1_net.Stage1Net on the train split (train.stage1_net: optax AdamW,
+               shifted and brightness-jittered images), bounded by --steps and --minutes
+  3. package   OUT/stage1 (stage1_net.json + float16 model.safetensors), its size printed
+  4. evaluate  the packaged folder through `load_reader`'s path on the test split: every text
+               runs through the factory and is scored by eval.metrics.parameters (texts that run,
+               category, part count exact, parts matched one-to-one by box IoU, Chamfer); also the
+               reader's seconds per image. OUT/summary.json holds the numbers, OUT/test.jsonl the
+               per-object scores, and the last lines print the table.
+With --release DIR the packaged folder is also copied there (e.g. jax3dc/release/stage1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import json
+import shutil
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from bench.release_model import _call
+
+
+def _load_split_images(folders: list[Path], size: int) -> dict[str, tuple[list[str], list[np.ndarray], list[str]]]:
+    """split -> (keys, network images as uint8, parameter texts) of the records that carry parameters."""
+    from data_pipeline.shards import read_dataset
+    from jax3dc.stage1_net import network_image
+
+    out: dict[str, tuple[list, list, list]] = defaultdict(lambda: ([], [], []))
+    for record in (r for folder in folders for r in read_dataset(folder)):
+        if not record.parameters:
+            continue
+        rgb = np.asarray(Image.open(io.BytesIO(record.image_png)).convert("RGB"))
+        keys, images, texts = out[record.meta.get("split", "train")]
+        keys.append(record.key)
+        images.append((network_image(rgb, size) * 255.0 + 0.5).astype(np.uint8))
+        texts.append(record.parameters)
+    return dict(out)
+
+
+def main() -> None:
+    from flax import nnx
+
+    from data_pipeline.factories.registry import SCHEMAS, run_parameters
+    from eval.metrics.parameters import score_parameters, summarise
+    from eval.parameters_run import table
+    from jax3dc.stage1_net import OutputLayout, Stage1Net, Stage1NetConfig, load_network, save_network
+    from train.stage1_net import TrainConfig, accuracy, targets, train
+
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--out", default="runs/stage1_net")
+    p.add_argument("--data", nargs="+", default=[], help="built datasets to use instead of building OUT/data")
+    p.add_argument("--objects", type=int, nargs="+", default=[4000, 7000],
+                   help="objects per build; build i (OUT/data-i) uses build seed i, so builds share no object")
+    p.add_argument("--render-size", type=int, default=128, help="image side of the build")
+    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--image-size", type=int, default=96, help="image side the network reads")
+    p.add_argument("--steps", type=int, default=3000)
+    p.add_argument("--minutes", type=float, default=10.0, help="training stops after this many minutes")
+    p.add_argument("--batch", type=int, default=64)
+    p.add_argument("--lr", type=float, default=2e-3)
+    p.add_argument("--eval-limit", type=int, default=0, help="test objects to score (0: all)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--release", default="", help="also copy the packaged folder here")
+    a = p.parse_args()
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    folders = [Path(d) for d in a.data] or [out / f"data-{seed}" for seed in range(len(a.objects))]
+    for seed, (folder, objects) in enumerate(zip(folders, a.objects if not a.data else [])):
+        manifest = folder / "manifest.json"
+        if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
+            _call(["data", "build", "--out", str(folder), "--objects", str(objects), "--seed", str(seed), "--scenes", "0",
+                   "--views", "1", "--size", str(a.render_size), "--workers", str(a.workers), "--appearance", "varied",
+                   "--quiet"])
+
+    t = time.perf_counter()
+    splits = _load_split_images(folders, a.image_size)
+    layout = OutputLayout.of(SCHEMAS)
+    sets = {name: targets(images, texts, layout, SCHEMAS) for name, (_, images, texts) in splits.items()}
+    print(f"[stage1_net] records: {({k: len(v) for k, v in sets.items()})} loaded in {time.perf_counter() - t:.0f} s",
+          flush=True)
+
+    model = Stage1Net(Stage1NetConfig.for_layout(layout, image_size=a.image_size), nnx.Rngs(a.seed))
+    config = TrainConfig(steps=a.steps, batch=a.batch, lr=a.lr, time_limit_s=a.minutes * 60, seed=a.seed)
+    t = time.perf_counter()
+    log = train(model, sets["train"], layout, config, on_log=lambda row: print(f"[stage1_net] {row}", flush=True))
+    train_s = time.perf_counter() - t
+    held_out = {name: accuracy(model, sets[name], layout) for name in ("val", "test") if name in sets}
+    print(f"[stage1_net] trained {log[-1]['step']} steps in {train_s:.0f} s; held out: {held_out}", flush=True)
+
+    package = out / "stage1"
+    recipe = (f"nice -n 10 python3 -m bench.stage1_net --objects {' '.join(map(str, a.objects))} "
+              f"--image-size {a.image_size} --steps {a.steps} --minutes {a.minutes}")
+    save_network(package, model, SCHEMAS, notes={"recipe": recipe, "train_records": len(sets["train"]),
+                                                 "steps": log[-1]["step"]})
+    weights = (package / "model.safetensors").stat().st_size
+    print(f"[stage1_net] packaged {package}: weights {weights / 2**20:.2f} MiB", flush=True)
+
+    network = load_network(package)  # score what ships (float16 weights), not the training copy
+    keys, images, texts = splits["test"]
+    n = len(keys) if a.eval_limit <= 0 else min(a.eval_limit, len(keys))
+    t = time.perf_counter()
+    predicted = [network.read(np.asarray(images[i], np.float32)[None] / 255.0)[0] for i in range(n)]
+    read_s = (time.perf_counter() - t) / max(n, 1)
+    t = time.perf_counter()
+    scores = [score_parameters(keys[i], texts[i], predicted[i], SCHEMAS, run_parameters) for i in range(n)]
+    score_s = time.perf_counter() - t
+    metrics = summarise(scores)
+    with (out / "test.jsonl").open("w", encoding="utf-8") as f:
+        for s, text, ref in zip(scores, predicted, texts):
+            f.write(json.dumps({**s.to_dict(), "predicted": text, "reference": ref}, separators=(",", ":")) + "\n")
+    per_category: dict[str, list] = defaultdict(list)
+    for s in scores:
+        per_category[s.key.split("/")[0]].append(s)
+    summary = {"args": vars(a), "records": {k: len(v) for k, v in sets.items()}, "train_seconds": round(train_s, 1),
+               "train_log": log, "held_out": held_out, "weights_bytes": weights,
+               "reader_seconds_per_image": round(read_s, 4), "scoring_seconds": round(score_s, 1), "test": metrics,
+               "test_per_category": {c: summarise(v) for c, v in sorted(per_category.items())}}
+    (out / "summary.json").write_text(json.dumps(summary, indent=1), encoding="utf-8")
+    if a.release:
+        shutil.copytree(package, a.release, dirs_exist_ok=True)
+        print(f"[stage1_net] copied to {a.release}", flush=True)
+    print(f"[stage1_net] reader {read_s * 1000:.1f} ms/image; wrote {out / 'summary.json'}")
+    print("\n## stage-1 image network, procedural test split\n" + table("stage1_net", metrics), flush=True)
+
+
+if __name__ == "__main__":
+    main()

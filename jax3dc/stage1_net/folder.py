@@ -1,0 +1,128 @@
+"""A stage-1 network folder: ``stage1_net.json`` (config and schemas) beside ``model.safetensors``.
+
+The JSON marker holds everything decoding needs (the categories and each entry's kind and range),
+so a folder is read without the factories. Weights are float16 (the network is small and its
+activations are normalised; float16 halves the shipped bytes). Loading is strict: a missing,
+unexpected or misshapen tensor raises InputFileError naming the file and the tensor.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Mapping
+
+import numpy as np
+import safetensors.numpy
+from flax import nnx
+from safetensors import SafetensorError
+
+from jax3dc.errors import InputFileError, Jax3dcError
+from jax3dc.parameters import Schema
+from jax3dc.stage1_net.decode import decode_text
+from jax3dc.stage1_net.image import network_image
+from jax3dc.stage1_net.layout import OutputLayout, schemas_from_json, schemas_to_json
+from jax3dc.stage1_net.model import Stage1Net, Stage1NetConfig, forward
+
+MARKER = "stage1_net.json"
+WEIGHTS = "model.safetensors"
+FORMAT = "jax3dc-stage1-net/1"
+
+
+@dataclass(frozen=True)
+class Stage1Network:
+    """A loaded network with what decoding needs."""
+
+    model: Stage1Net
+    schemas: dict[str, Schema]
+    layout: OutputLayout
+
+    def read(self, images: np.ndarray) -> list[str]:
+        """Parameter texts of a batch of network images ([B, size, size, 3] floats in [0, 1])."""
+        cat, num, disc = (np.asarray(x) for x in forward(self.model, images))
+        return [decode_text(self.layout, self.schemas, cat[i], num[i], disc[i]) for i in range(len(images))]
+
+
+def _tensor_name(path: tuple) -> str:
+    return ".".join(str(p) for p in path)
+
+
+def save_network(folder: str | Path, model: Stage1Net, schemas: Mapping[str, Schema], notes: dict | None = None) -> Path:
+    """Writes the folder (created if needed); ``notes`` (e.g. the training recipe) go into the marker."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    tensors = {_tensor_name(path): np.asarray(v[...], np.float16)
+               for path, v in nnx.to_flat_state(nnx.state(model, nnx.Param))}
+    safetensors.numpy.save_file(tensors, str(folder / WEIGHTS))
+    marker = {"format": FORMAT, "config": model.config.to_json(), "schemas": schemas_to_json(schemas),
+              "weights": WEIGHTS, **({"notes": notes} if notes else {})}
+    (folder / MARKER).write_text(json.dumps(marker, indent=1) + "\n", encoding="utf-8")
+    return folder
+
+
+def _read_marker(folder: Path) -> dict:
+    path = folder / MARKER
+    if not folder.is_dir():
+        raise InputFileError(str(folder), "not a folder (expected a stage-1 network folder holding " + MARKER + ")")
+    if not path.is_file():
+        raise InputFileError(str(path), "missing: not a stage-1 network folder")
+    try:
+        marker = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as e:
+        raise InputFileError(str(path), f"not valid JSON ({e})") from None
+    if not isinstance(marker, dict) or marker.get("format") != FORMAT:
+        raise InputFileError(str(path), f"format is not {FORMAT!r}")
+    return marker
+
+
+def load_network(folder: str | Path) -> Stage1Network:
+    """The network a ``save_network`` folder holds; see the module docstring for the errors."""
+    folder = Path(folder)
+    marker = _read_marker(folder)
+    marker_path = str(folder / MARKER)
+    try:
+        schemas = schemas_from_json(marker["schemas"])
+        config = Stage1NetConfig.from_json(marker["config"])
+    except (KeyError, TypeError, ValueError, Jax3dcError) as e:
+        raise InputFileError(marker_path, f"bad config or schemas ({e})") from None
+    layout = OutputLayout.of(schemas)
+    if Stage1NetConfig.for_layout(layout, image_size=config.image_size, widths=config.widths,
+                                  reduced=config.reduced, hidden=config.hidden) != config:
+        raise InputFileError(marker_path, "the config's head sizes do not match its schemas")
+    weights = folder / str(marker.get("weights", WEIGHTS))
+    if not weights.is_file():
+        raise InputFileError(str(weights), "missing: the network's weights")
+    try:
+        tensors = safetensors.numpy.load_file(str(weights))
+    except (SafetensorError, OSError, ValueError) as e:
+        raise InputFileError(str(weights), f"not a readable safetensors file ({e})") from None
+    model = nnx.eval_shape(lambda: Stage1Net(config, nnx.Rngs(0)))
+    state = nnx.state(model, nnx.Param)
+    flat = nnx.to_flat_state(state)
+    expected = {_tensor_name(path) for path, _ in flat}
+    extra = sorted(set(tensors) - expected)
+    if extra:
+        raise InputFileError(str(weights), f"unexpected tensor {extra[0]!r} ({len(extra)} in all)")
+    for path, variable in flat:
+        name = _tensor_name(path)
+        if name not in tensors:
+            raise InputFileError(str(weights), f"missing tensor {name!r}")
+        if tensors[name].shape != variable.shape:
+            raise InputFileError(str(weights), f"tensor {name!r} has shape {tensors[name].shape}, "
+                                               f"the config needs {variable.shape}")
+        variable.set_value(np.asarray(tensors[name], np.float32))
+    nnx.update(model, nnx.from_flat_state(flat))
+    return Stage1Network(model, schemas, layout)
+
+
+def load_reader(folder: str | Path) -> Callable[[np.ndarray], str]:
+    """A function from an RGB uint8 image (any size, HxWx3) to the parameter text of its object;
+    a bad image raises ImageInputError (jax3dc.stage1_net.image)."""
+    network = load_network(folder)
+    size = network.model.config.image_size
+
+    def read(image: np.ndarray) -> str:
+        return network.read(network_image(image, size)[None])[0]
+
+    return read

@@ -1,0 +1,24 @@
+"""The shipped stage-1 network (jax3dc/release/stage1) loads, stays small and reads an image into a
+parameter text the factory runs."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from data_pipeline.factories.registry import SCHEMAS, run_parameters
+from jax3dc.parameters import parse_parameters
+from jax3dc.release import STAGE1_DIR
+from jax3dc.stage1_net import MARKER, load_network, load_reader
+
+
+def test_the_shipped_folder_is_small_and_knows_every_category():
+    assert (STAGE1_DIR / MARKER).is_file() and (STAGE1_DIR / "MODEL_CARD.md").is_file()
+    assert (STAGE1_DIR / "model.safetensors").stat().st_size < 2 * 2**20
+    assert load_network(STAGE1_DIR).schemas == SCHEMAS  # the factories' schemas have not moved on
+
+
+def test_the_shipped_reader_writes_a_text_that_runs():
+    image = np.full((120, 160, 3), 90, np.uint8)
+    image[30:100, 60:100] = (150, 100, 60)  # a brown box on grey
+    params = parse_parameters(load_reader(STAGE1_DIR)(image), SCHEMAS)
+    assert run_parameters(params).parts

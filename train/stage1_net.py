@@ -1,0 +1,163 @@
+"""Training the stage-1 image network (jax3dc.stage1_net) on records' images and parameter texts.
+
+Targets per record: the category index; each of its Number values normalised to [0, 1] of the
+entry's range; each discrete value's class. Loss: cross-entropy of the category, plus, over the
+true category's values only, the mean cross-entropy of the discrete values and a weighted
+smooth-L1 of the numbers (other categories' outputs get no gradient). Images are shifted by a few
+pixels and their brightness jittered each step, which the small build needs against overfitting.
+One jitted step, optax AdamW with warm-up and cosine decay, bounded by steps and wall time.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Callable, Mapping, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from flax import nnx
+
+from jax3dc.parameters import Count, Schema, parse_parameters
+from jax3dc.stage1_net.decode import normalised_number
+from jax3dc.stage1_net.layout import OutputLayout
+from jax3dc.stage1_net.model import Stage1Net, forward
+
+
+@dataclass(frozen=True)
+class Targets:
+    """Arrays of one set of records: images uint8 [B, S, S, 3] and the targets described above."""
+
+    images: np.ndarray
+    category: np.ndarray  # [B] int32
+    numbers: np.ndarray  # [B, N] float32 in [0, 1]
+    number_mask: np.ndarray  # [B, N] bool: the record's category owns the value
+    discrete: np.ndarray  # [B, D] int32 class index
+    discrete_mask: np.ndarray  # [B, D] bool
+
+    def take(self, index: np.ndarray) -> "Targets":
+        return Targets(*(getattr(self, f)[index] for f in self.__dataclass_fields__))
+
+    def __len__(self) -> int:
+        return len(self.category)
+
+
+def targets(images: Sequence[np.ndarray], texts: Sequence[str], layout: OutputLayout,
+            schemas: Mapping[str, Schema]) -> Targets:
+    """The arrays of records given as network images (uint8) and parameter texts."""
+    n = len(texts)
+    nn, nd = max(len(layout.numbers), 1), max(len(layout.discrete), 1)
+    out = Targets(np.stack(images).astype(np.uint8), np.zeros(n, np.int32), np.zeros((n, nn), np.float32),
+                  np.zeros((n, nn), bool), np.zeros((n, nd), np.int32), np.zeros((n, nd), bool))
+    index = {c: i for i, c in enumerate(layout.categories)}
+    for i, text in enumerate(texts):
+        params = parse_parameters(text, schemas)
+        out.category[i] = index[params.category]
+        for s in layout.numbers:
+            if s.category == params.category:
+                value = params[s.spec.name] if s.slot is None else params[s.spec.name][s.slot]
+                out.numbers[i, s.index] = normalised_number(s.spec, value)
+                out.number_mask[i, s.index] = True
+        for s in layout.discrete:
+            if s.category == params.category:
+                value = params[s.spec.name] if s.slot is None else params[s.spec.name][s.slot]
+                out.discrete[i, s.index] = value - s.spec.lo if isinstance(s.spec, Count) else value
+                out.discrete_mask[i, s.index] = True
+    return out
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    steps: int = 3000
+    batch: int = 64
+    lr: float = 2e-3
+    warmup: int = 100
+    weight_decay: float = 1e-4
+    number_weight: float = 4.0
+    shift: int = 6  # pixels of random translation
+    time_limit_s: float = 600.0
+    log_every: int = 100
+    seed: int = 0
+
+
+def augment(images: np.ndarray, rng: np.random.Generator, shift: int) -> np.ndarray:
+    """Float images [0, 1]: each shifted by up to ``shift`` px (edges repeated) and its brightness,
+    contrast and colour balance jittered a little."""
+    b, s = images.shape[:2]
+    padded = np.pad(images, ((0, 0), (shift, shift), (shift, shift), (0, 0)), mode="edge")
+    dy, dx = rng.integers(0, 2 * shift + 1, size=(2, b))
+    out = np.stack([padded[i, dy[i]:dy[i] + s, dx[i]:dx[i] + s] for i in range(b)]).astype(np.float32) / 255.0
+    gain = rng.uniform(0.8, 1.2, (b, 1, 1, 1)) * rng.uniform(0.93, 1.07, (b, 1, 1, 3))
+    mean = out.mean(axis=(1, 2, 3), keepdims=True)
+    contrast = rng.uniform(0.8, 1.2, (b, 1, 1, 1))
+    return np.clip((out - mean) * contrast + mean * gain, 0.0, 1.0).astype(np.float32)
+
+
+def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: float) -> tuple[jax.Array, dict]:
+    category, numbers, discrete = model(batch["images"])
+    ce_cat = optax.softmax_cross_entropy_with_integer_labels(category, batch["category"]).mean()
+    logits = jnp.where(class_mask[None], discrete, -1e9)
+    ce = optax.softmax_cross_entropy_with_integer_labels(logits, batch["discrete"])
+    dmask = batch["discrete_mask"].astype(jnp.float32)
+    ce_disc = (ce * dmask).sum() / jnp.maximum(dmask.sum(), 1.0)
+    nmask = batch["number_mask"].astype(jnp.float32)
+    err = optax.huber_loss(numbers, batch["numbers"], delta=0.1) / 0.1
+    l_num = (err * nmask).sum() / jnp.maximum(nmask.sum(), 1.0)
+    loss = ce_cat + ce_disc + number_weight * l_num
+    return loss, {"loss": loss, "category_ce": ce_cat, "discrete_ce": ce_disc, "number_l1": l_num}
+
+
+def train(model: Stage1Net, data: Targets, layout: OutputLayout, config: TrainConfig,
+          on_log: Callable[[dict], None] = print) -> list[dict]:
+    """Trains ``model`` in place; returns the logged rows (step, seconds, losses)."""
+    warmup = min(config.warmup, config.steps // 2)
+    schedule = optax.warmup_cosine_decay_schedule(0.0, config.lr, warmup, config.steps, config.lr * 0.02)
+    optimizer = nnx.Optimizer(model, optax.adamw(schedule, weight_decay=config.weight_decay), wrt=nnx.Param)
+    class_mask = jnp.asarray(layout.class_mask())
+
+    @nnx.jit(donate_argnums=(0, 1))
+    def step(model: Stage1Net, optimizer: nnx.Optimizer, batch: dict) -> dict:
+        grads, metrics = nnx.grad(_loss, has_aux=True)(model, batch, class_mask, config.number_weight)
+        optimizer.update(model, grads)
+        return metrics
+
+    rng = np.random.default_rng(config.seed)
+    rows, running, start = [], [], time.perf_counter()
+    order, at = rng.permutation(len(data)), 0
+    for i in range(1, config.steps + 1):
+        if at + config.batch > len(order):
+            order, at = rng.permutation(len(data)), 0
+        part = data.take(order[at:at + config.batch])
+        at += config.batch
+        batch = {"images": augment(part.images, rng, config.shift), "category": part.category,
+                 "numbers": part.numbers, "number_mask": part.number_mask, "discrete": part.discrete,
+                 "discrete_mask": part.discrete_mask}
+        running.append(step(model, optimizer, batch))
+        elapsed = time.perf_counter() - start
+        if i % config.log_every == 0 or i == config.steps or elapsed > config.time_limit_s:
+            row = {"step": i, "seconds": round(elapsed, 1),
+                   **{k: round(float(np.mean([float(m[k]) for m in running])), 4) for k in running[0]}}
+            rows.append(row)
+            on_log(row)
+            running = []
+        if elapsed > config.time_limit_s:
+            break
+    return rows
+
+
+def accuracy(model: Stage1Net, data: Targets, layout: OutputLayout, batch: int = 128) -> dict:
+    """Quick held-out scores without running any factory: category accuracy, the discrete values'
+    accuracy and the numbers' mean absolute error (share of the range), both on the true category."""
+    cats, disc_ok, num_err = [], [], []
+    class_mask = layout.class_mask()
+    for lo in range(0, len(data), batch):
+        part = data.take(np.arange(lo, min(lo + batch, len(data))))
+        category, numbers, discrete = (np.asarray(x) for x in forward(model, part.images.astype(np.float32) / 255.0))
+        cats.append(category.argmax(-1) == part.category)
+        pred = np.where(class_mask[None], discrete, -np.inf).argmax(-1)
+        disc_ok.append((pred == part.discrete)[part.discrete_mask])
+        num_err.append(np.abs(np.clip(numbers, 0, 1) - part.numbers)[part.number_mask])
+    return {"category": float(np.concatenate(cats).mean()), "discrete": float(np.concatenate(disc_ok).mean()),
+            "number_mae": float(np.concatenate(num_err).mean())}
