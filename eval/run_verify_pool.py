@@ -20,6 +20,7 @@ from data_pipeline.record import Record
 from data_pipeline.record_parts import record_parts
 from jax3dc.verify.repair import Repaired, repair
 from jax3dc.verify.select import Candidate, Choice, choose
+from jax3dc.verify.verdicts import Physics, VerdictCache
 from jax3dc.structure import boxes_from_dict
 
 
@@ -67,8 +68,9 @@ def verify_one(job: Job, backend: str = "c", dynamics: bool = True, threads: int
     """One job in this process."""
     parts, scale, mounted = record_parts(job.record, job.sources)
     boxes = boxes_from_dict(job.record.meta["boxes"])
-    choice = choose(job.candidates, boxes.keys(), parts, scale, mounted, boxes, backend, dynamics, threads)
+    check = VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))  # the repair reuses the choice's verdicts
+    choice = choose(job.candidates, boxes.keys(), parts, scale, mounted, boxes, check=check)
     fixed = None
     if job.repair and choice.structure is not None and not choice.rows[choice.index].ok:
-        fixed = repair(choice.structure, parts, scale, mounted, boxes, backend, dynamics, threads)
+        fixed = repair(choice.structure, parts, scale, mounted, boxes, check=check)
     return Verified(job.record.key, choice, fixed)

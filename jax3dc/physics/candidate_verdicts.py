@@ -1,0 +1,70 @@
+"""Verdicts of many structures over the same parts (the K candidates of one object, a repair's
+alternatives) with their interpenetration sweeps in one compiled MJX launch.
+
+The structures share the part meshes, so their collision pieces come from one decomposition per
+part and frame (``convex_pieces``' caches: a candidate that moves no part's frame decomposes
+nothing). Each structure's kinematic model, check states and C proximity are built on the CPU as
+``verdict.verdict_with_curves`` builds them; the penetration depths of every structure's states
+then come from one ``mjx_batch`` launch, padded to at least ``START_SHAPES`` and to the largest
+shapes this process has met, so a run over many objects compiles only when a larger object comes.
+The rollouts of the dynamic checks run in C, as ``physics sweep --backend mjx`` runs them: each
+structure's reachability model has its own contact pairs, which MJX keeps static, so they cannot
+share a compiled launch, and they are a small share of a verdict (``verify.verdicts``).
+
+With the same models, states, proximity and rollouts, the verdicts differ from the C path's only
+where C's float64 and MJX's float32 depths fall on two sides of a tolerance;
+``tests/physics/test_physics_candidate_verdicts.py`` checks the verdict lines and the winners.
+"""
+
+from __future__ import annotations
+
+import functools
+import threading
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+import trimesh
+
+from jax3dc.physics import cpu_backend
+from jax3dc.physics.findings import Verdict
+from jax3dc.physics.verdict import check_names, kinematic_inputs, penetration_model, verdict_from
+from jax3dc.structure.schema import Structure
+
+# The first launch of a process is padded to these (8 candidates of a factory object, or a repair's
+# alternatives, fit them: up to 26 bodies, 1,536 geom pairs and ~100 states a structure), so that
+# the shapes seldom grow.
+START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=1024, hulls=(64, 384),
+                    hull_sizes=((8, 12, 12), (32, 64, 96)))
+
+_largest = None  # mjx_batch.Shapes: the largest this process has launched (every launch pads to it)
+_lock = threading.Lock()
+
+
+def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh.Trimesh], scale: float, mounted: bool,
+                       dynamics: bool = True, threads: int | None = None,
+                       timings: dict[str, float] | None = None) -> list[Verdict]:
+    """One verdict per structure (in order) over ``parts`` (nu, ``scale`` metres per nu), the
+    interpenetration of all of them measured in one MJX launch. ``threads``: C rollout threads;
+    ``timings`` gathers the launch's phases (``mjx_batch.batch_pair_distances``)."""
+    if not structures:
+        return []
+    names = check_names(None, dynamics)
+    inputs = [kinematic_inputs(s, parts, scale) for s in structures]
+    distances = _launch([penetration_model(s, parts, i) for s, i in zip(structures, inputs)],
+                        [i.states.qpos for i in inputs], timings)
+    rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
+    return [verdict_from(s, parts, i, d, rollout, mounted, names)[0] for s, i, d in zip(structures, inputs, distances)]
+
+
+def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | None) -> list[np.ndarray]:
+    global _largest
+    from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
+
+    with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use
+        warnings.simplefilter("ignore", UserWarning)
+        arrays = [object_arrays(m) for m in models]
+    with _lock:
+        at_least = _largest or Shapes(**START_SHAPES)
+        distances, _largest = batch_pair_distances(arrays, qpos, at_least, timings)
+    return distances
