@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import functools
 import threading
+import time
 import warnings
 from collections.abc import Sequence
 
@@ -31,9 +32,11 @@ from jax3dc.physics.findings import Verdict
 from jax3dc.physics.verdict import check_names, kinematic_inputs, penetration_model, verdict_from
 from jax3dc.structure.schema import Structure
 
-# The first launch of a process is padded to these (8 candidates of a factory object, or a repair's
-# alternatives, fit them: up to 26 bodies, 1,536 geom pairs and ~100 states a structure), so that
-# the shapes seldom grow.
+# On an accelerator the first launch of a process is padded to these (8 candidates of a factory
+# object, or a repair's alternatives, fit them: up to 26 bodies, 1,536 geom pairs and ~100 states a
+# structure), so that the shapes seldom grow. On a CPU padding costs compute in proportion (8
+# cabinet candidates: 2.7 s of broad phase padded so, on 2 cores), so launches start at the size
+# classes they need and grow from there.
 START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=1024, hulls=(64, 384),
                     hull_sizes=((8, 12, 12), (32, 64, 96)))
 
@@ -46,25 +49,46 @@ def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh
                        timings: dict[str, float] | None = None) -> list[Verdict]:
     """One verdict per structure (in order) over ``parts`` (nu, ``scale`` metres per nu), the
     interpenetration of all of them measured in one MJX launch. ``threads``: C rollout threads;
-    ``timings`` gathers the launch's phases (``mjx_batch.batch_pair_distances``)."""
+    ``timings`` gathers seconds per step: the CPU's "kinematic inputs", "penetration models" and
+    "checks" (rollouts included), and the launch's phases (``mjx_batch.batch_pair_distances``)."""
     if not structures:
         return []
     names = check_names(None, dynamics)
+    clock = _Clock(timings)
     inputs = [kinematic_inputs(s, parts, scale) for s in structures]
-    distances = _launch([penetration_model(s, parts, i) for s, i in zip(structures, inputs)],
-                        [i.states.qpos for i in inputs], timings)
+    clock.lap("kinematic inputs")
+    models = [penetration_model(s, parts, i) for s, i in zip(structures, inputs)]
+    clock.lap("penetration models")
+    distances = _launch(models, [i.states.qpos for i in inputs], timings)
+    clock.lap()
     rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
-    return [verdict_from(s, parts, i, d, rollout, mounted, names)[0] for s, i, d in zip(structures, inputs, distances)]
+    verdicts = [verdict_from(s, parts, i, d, rollout, mounted, names)[0] for s, i, d in zip(structures, inputs, distances)]
+    clock.lap("checks")
+    return verdicts
+
+
+class _Clock:
+    """Seconds per step into ``timings`` (when given)."""
+
+    def __init__(self, timings: dict[str, float] | None):
+        self.timings, self.last = timings, time.perf_counter()
+
+    def lap(self, name: str | None = None) -> None:
+        now = time.perf_counter()
+        if name is not None and self.timings is not None:
+            self.timings[name] = self.timings.get(name, 0.0) + now - self.last
+        self.last = now
 
 
 def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | None) -> list[np.ndarray]:
     global _largest
+    import jax
     from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
 
     with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use
         warnings.simplefilter("ignore", UserWarning)
         arrays = [object_arrays(m) for m in models]
     with _lock:
-        at_least = _largest or Shapes(**START_SHAPES)
+        at_least = _largest or (Shapes() if jax.default_backend() == "cpu" else Shapes(**START_SHAPES))
         distances, _largest = batch_pair_distances(arrays, qpos, at_least, timings)
     return distances
