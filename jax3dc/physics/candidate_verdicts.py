@@ -7,6 +7,8 @@ nothing). Each structure's kinematic model, check states and C proximity are bui
 ``verdict.verdict_with_curves`` builds them; the penetration depths of every structure's states
 then come from one ``mjx_batch`` launch, padded to at least ``START_SHAPES`` and to the largest
 shapes this process has met, so a run over many objects compiles only when a larger object comes.
+In a worker process of a device service (``mjx_service``, as ``physics sweep --backend mjx`` runs
+it) the structures go to the service instead, which launches the requests of all its workers together.
 The rollouts of the dynamic checks run in C, as ``physics sweep --backend mjx`` runs them: each
 structure's reachability model has its own contact pairs, which MJX keeps static, so they cannot
 share a compiled launch, and they are a small share of a verdict (``verify.verdicts``).
@@ -81,7 +83,14 @@ class _Clock:
 
 
 def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | None) -> list[np.ndarray]:
+    """In a worker of a device service (``mjx_service``), the service's launch, shared with the other
+    workers' requests; else one launch in this process."""
     global _largest
+    from jax3dc.physics.mjx_service import installed_client
+
+    service = installed_client()
+    if service is not None:
+        return service.many(models, qpos)
     import jax
     from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
 

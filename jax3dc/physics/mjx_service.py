@@ -110,13 +110,20 @@ class DeviceClient:
     reply: object
 
     def __call__(self, model: mujoco.MjModel, qpos: np.ndarray) -> np.ndarray:
+        return self.many([model], [qpos])[0]
+
+    def many(self, models: list[mujoco.MjModel], qpos: list[np.ndarray]) -> list[np.ndarray]:
+        """Several models' distances (a candidate set's): all sent before the first reply is awaited,
+        so the service can put them in one launch; replies come back in request order."""
         from jax3dc.physics.mjx_batch import object_arrays
 
-        self.requests.put((self.worker, object_arrays(model), np.asarray(qpos)))
-        result = self.reply.get()
-        if isinstance(result, Exception):
-            raise result
-        return result
+        for model, q in zip(models, qpos):
+            self.requests.put((self.worker, object_arrays(model), np.asarray(q)))
+        results = [self.reply.get() for _ in models]
+        for result in results:
+            if isinstance(result, Exception):
+                raise result
+        return results
 
 
 def init_worker(requests, replies, next_worker) -> None:
@@ -130,6 +137,11 @@ def init_worker(requests, replies, next_worker) -> None:
         worker = next_worker.value
         next_worker.value += 1
     _CLIENT = DeviceClient(worker, requests, replies[worker])
+
+
+def installed_client() -> DeviceClient | None:
+    """This process's client when a pool's ``init_worker`` installed one, else None."""
+    return _CLIENT
 
 
 def client() -> DeviceClient:
