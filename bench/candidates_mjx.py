@@ -101,9 +101,10 @@ def _run(jobs: list[_Job], backend: str, workers: int, context) -> tuple[list[di
         device = None
         kwargs = {}
         if backend == "mjx":
+            from jax3dc.physics.candidate_verdicts import start_shapes
             from jax3dc.physics.mjx_service import DeviceService, init_worker
 
-            device = DeviceService(context, workers, batch_objects=16)
+            device = DeviceService(context, workers, batch_objects=16, start_shapes=start_shapes())
             stop = threading.Event()
             server = threading.Thread(target=device.serve, args=(stop,), daemon=True)
             server.start()

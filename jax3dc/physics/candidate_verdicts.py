@@ -42,6 +42,14 @@ from jax3dc.structure.schema import Structure
 START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=1024, hulls=(64, 384),
                     hull_sizes=((8, 12, 12), (32, 64, 96)))
 
+def start_shapes() -> dict:
+    """What a process's first candidate launch is padded to on this platform (``mjx_batch.Shapes``
+    fields; none on a CPU: the size classes the launch needs)."""
+    import jax
+
+    return {} if jax.default_backend() == "cpu" else START_SHAPES
+
+
 _largest = None  # mjx_batch.Shapes: the largest this process has launched (every launch pads to it)
 _lock = threading.Lock()
 
@@ -98,6 +106,6 @@ def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | No
         warnings.simplefilter("ignore", UserWarning)
         arrays = [object_arrays(m) for m in models]
     with _lock:
-        at_least = _largest or (Shapes() if jax.default_backend() == "cpu" else Shapes(**START_SHAPES))
+        at_least = _largest or Shapes(**start_shapes())
         distances, _largest = batch_pair_distances(arrays, qpos, at_least, timings)
     return distances

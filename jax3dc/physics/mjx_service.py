@@ -51,7 +51,11 @@ class ServiceStats:
 class DeviceService:
     """Queues between sweep workers and the accelerator; ``serve`` runs in a thread of the main process."""
 
-    def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05):
+    def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05,
+                 start_shapes: dict | None = None):
+        """``start_shapes``: what the first launch is padded to (``mjx_batch.Shapes`` fields;
+        default SWEEP_START_SHAPES)."""
+        self.start_shapes = SWEEP_START_SHAPES if start_shapes is None else start_shapes
         self.requests = context.Queue()
         self.replies = [context.Queue() for _ in range(workers)]
         self.next_worker = context.Value("i", 0)
@@ -68,7 +72,7 @@ class DeviceService:
 
         clock = CompileClock()
         # the largest met so far: every launch is padded to it, so compiles happen only as it grows
-        shapes = Shapes(**SWEEP_START_SHAPES)
+        shapes = Shapes(**self.start_shapes)
         self.stats.shapes = shapes
         while not stop.is_set():
             try:
