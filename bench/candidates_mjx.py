@@ -172,13 +172,16 @@ def main() -> None:
         print(f"{backend}: {wall:.1f} s for {len(jobs)} objects, {wall / len(jobs):.3f} s per object "
               f"({args.workers} workers)", flush=True)
     if len(runs) == 2:
-        same = [m["winner"] == c["winner"] and m["final"] == c["final"] and m["lines"] == c["lines"]
-                for m, c in zip(runs["mjx"], runs["c"])]
+        same = [m["winner"] == c["winner"] and m["final"] == c["final"] for m, c in zip(runs["mjx"], runs["c"])]
+        lines = [x == y for m, c in zip(runs["mjx"], runs["c"]) for x, y in zip(m["lines"], c["lines"])]
         report["speedup_mjx_over_c"] = round(report["c"]["wall_s"] / report["mjx"]["wall_s"], 2)
-        report["same_winners_repairs_and_lines"] = f"{sum(same)}/{len(same)}"
-        report["differing"] = [m["name"] for m, ok in zip(runs["mjx"], same) if not ok]
-        print(f"C / MJX: {report['speedup_mjx_over_c']}x per object; same winners, repairs and verdict lines: "
-              f"{report['same_winners_repairs_and_lines']}", flush=True)
+        report["same_winners_and_repairs"] = f"{sum(same)}/{len(same)}"
+        report["same_candidate_verdict_lines"] = f"{sum(lines)}/{len(lines)}"
+        report["differing"] = {m["name"]: [i for i, (x, y) in enumerate(zip(m["lines"], c["lines"])) if x != y]
+                               for m, c in zip(runs["mjx"], runs["c"]) if m != {**c, "seconds": m["seconds"]}}
+        print(f"C / MJX: {report['speedup_mjx_over_c']}x per object; same winners and repairs: "
+              f"{report['same_winners_and_repairs']} objects; same verdict lines: "
+              f"{report['same_candidate_verdict_lines']} candidates", flush=True)
     if args.phases:
         report["mjx_phases_s"] = _phases(jobs[:args.phases])
         print(f"MJX steps over {args.phases} objects' candidate sets: {report['mjx_phases_s']}")
