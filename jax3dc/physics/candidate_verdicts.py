@@ -47,6 +47,7 @@ from jax3dc.structure.schema import Structure
 START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=1024, hulls=(64, 384),
                     hull_sizes=((8, 12, 12), (32, 64, 96)))
 
+
 def start_shapes() -> dict:
     """What a process's first candidate launch is padded to on this platform (``mjx_batch.Shapes``
     fields; none on a CPU: the size classes the launch needs)."""
@@ -104,7 +105,6 @@ def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | No
     service = installed_client()
     if service is not None:
         return service.many(models, qpos)
-    import jax
     from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
 
     with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use
