@@ -116,7 +116,7 @@ def run_eval(args: argparse.Namespace) -> int:
             from eval.run_verify import verify_predictions
 
             preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair,
-                                                 source_folders(args.sources))
+                                                 source_folders(args.sources), args.physics_backend)
             notes.append(verified.summary())
             print(notes[-1])
     extra = {"references.jsonl": "references.jsonl"}
@@ -241,6 +241,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     run.add_argument("--workers", type=positive_int, default=max(1, (os.cpu_count() or 1)),
                      help="processes for the physics verdicts (default: one per core)")
+    run.add_argument("--physics-backend", choices=("c", "mjx"), default="c",
+                     help="how --candidates/--repair check: c (C MuJoCo in --workers processes) or mjx (the workers' "
+                     "candidates' interpenetration sweeps launched together on the accelerator, rollouts in C; "
+                     "bench/candidates_mjx.py). Default c")
     run.add_argument("--sources", nargs="*", default=[], metavar="FOLDER",
                      help="folders holding the source objects of imported records (their part meshes for the "
                      "physics verdict), e.g. the PartNet-Mobility folders given to data import")

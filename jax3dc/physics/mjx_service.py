@@ -51,7 +51,11 @@ class ServiceStats:
 class DeviceService:
     """Queues between sweep workers and the accelerator; ``serve`` runs in a thread of the main process."""
 
-    def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05):
+    def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05,
+                 start_shapes: dict | None = None):
+        """``start_shapes``: what the first launch is padded to (``mjx_batch.Shapes`` fields;
+        default SWEEP_START_SHAPES)."""
+        self.start_shapes = SWEEP_START_SHAPES if start_shapes is None else start_shapes
         self.requests = context.Queue()
         self.replies = [context.Queue() for _ in range(workers)]
         self.next_worker = context.Value("i", 0)
@@ -68,7 +72,7 @@ class DeviceService:
 
         clock = CompileClock()
         # the largest met so far: every launch is padded to it, so compiles happen only as it grows
-        shapes = Shapes(**SWEEP_START_SHAPES)
+        shapes = Shapes(**self.start_shapes)
         self.stats.shapes = shapes
         while not stop.is_set():
             try:
@@ -110,13 +114,20 @@ class DeviceClient:
     reply: object
 
     def __call__(self, model: mujoco.MjModel, qpos: np.ndarray) -> np.ndarray:
+        return self.many([model], [qpos])[0]
+
+    def many(self, models: list[mujoco.MjModel], qpos: list[np.ndarray]) -> list[np.ndarray]:
+        """Several models' distances (a candidate set's): all sent before the first reply is awaited,
+        so the service can put them in one launch; replies come back in request order."""
         from jax3dc.physics.mjx_batch import object_arrays
 
-        self.requests.put((self.worker, object_arrays(model), np.asarray(qpos)))
-        result = self.reply.get()
-        if isinstance(result, Exception):
-            raise result
-        return result
+        for model, q in zip(models, qpos):
+            self.requests.put((self.worker, object_arrays(model), np.asarray(q)))
+        results = [self.reply.get() for _ in models]
+        for result in results:
+            if isinstance(result, Exception):
+                raise result
+        return results
 
 
 def init_worker(requests, replies, next_worker) -> None:
@@ -130,6 +141,11 @@ def init_worker(requests, replies, next_worker) -> None:
         worker = next_worker.value
         next_worker.value += 1
     _CLIENT = DeviceClient(worker, requests, replies[worker])
+
+
+def installed_client() -> DeviceClient | None:
+    """This process's client when a pool's ``init_worker`` installed one, else None."""
+    return _CLIENT
 
 
 def client() -> DeviceClient:

@@ -83,26 +83,60 @@ def verdict_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh],
     states to its batched device service and keeps the rollouts in C). ``checks``: names of CHECKS
     to run, in order (default: the kinematic ones, and the dynamic ones with ``dynamics``).
     """
-    names = tuple(checks) if checks is not None else KINEMATIC_CHECKS + (DYNAMIC_CHECKS if dynamics else ())
-    unknown = [n for n in names if n not in CHECKS]
-    if unknown:
-        raise ValueError(f"unknown physics checks {unknown}; known: {', '.join(CHECKS)}")
-    with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
-        kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale), pieces)
-    states = check_states(kinematic)
-    proximity = cpu_backend.pair_distances(kinematic.model, states.qpos)
-    distances = proximity
+    names = check_names(checks, dynamics)
+    inputs = kinematic_inputs(structure, parts, scale, pieces)
+    distances = inputs.proximity
     if backend == "mjx":  # MJX has no mesh-mesh margin: it gives penetration, C keeps the proximity check
         if penetration is None:
             from jax3dc.physics.mjx_batch import padded_pair_distances as penetration
-        bare = build_sim_model(structure, parts, scale, SimOptions(), kinematic.pieces)
-        distances = penetration(bare.model, states.qpos)
+        distances = penetration(penetration_model(structure, parts, inputs), inputs.states.qpos)
     if rollout is None and backend == "mjx" and set(names) & set(DYNAMIC_CHECKS):
         from jax3dc.physics.mjx_dynamics import mjx_final_qpos as rollout
     elif rollout is None:
         rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
-    run = CheckRun(structure, parts, kinematic, states, distances, proximity, rollout, mounted)
-    return run_checks(run, names), penetration_curves(kinematic, states, distances)
+    return verdict_from(structure, parts, inputs, distances, rollout, mounted, names)
+
+
+def check_names(checks: Sequence[str] | None, dynamics: bool) -> tuple[str, ...]:
+    """The checks to run, in order: ``checks`` (names of CHECKS), else the kinematic ones and,
+    with ``dynamics``, the dynamic ones (a ValueError names any unknown one)."""
+    names = tuple(checks) if checks is not None else KINEMATIC_CHECKS + (DYNAMIC_CHECKS if dynamics else ())
+    unknown = [n for n in names if n not in CHECKS]
+    if unknown:
+        raise ValueError(f"unknown physics checks {unknown}; known: {', '.join(CHECKS)}")
+    return names
+
+
+@dataclass(frozen=True)
+class KinematicInputs:
+    """What every backend computes on the CPU before the penetration query: the kinematic model
+    (with the detachment margin), the joint states the checks visit, and C MuJoCo's contact
+    distances within the margin over them ([S, nbody, nbody], m)."""
+
+    sim: SimModel
+    states: StateBatch
+    proximity: np.ndarray
+
+
+def kinematic_inputs(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float,
+                     pieces: dict[int, list[np.ndarray]] | None = None) -> KinematicInputs:
+    with np.errstate(all="ignore"):  # trimesh's mass integrals divide by the zero volume of flat parts
+        kinematic = build_sim_model(structure, parts, scale, SimOptions(margin_m=DETACH_TOL_NU * scale), pieces)
+    states = check_states(kinematic)
+    return KinematicInputs(kinematic, states, cpu_backend.pair_distances(kinematic.model, states.qpos))
+
+
+def penetration_model(structure: Structure, parts: dict[int, trimesh.Trimesh], inputs: KinematicInputs) -> mujoco.MjModel:
+    """The model MJX measures penetration on: the kinematic one without the margin (same pieces)."""
+    return build_sim_model(structure, parts, inputs.sim.scale, SimOptions(), inputs.sim.pieces).model
+
+
+def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], inputs: KinematicInputs, distances: np.ndarray,
+                 rollout: Rollout, mounted: bool, names: Sequence[str]) -> tuple[Verdict, dict[int, Any]]:
+    """The verdict of the checks ``names`` and the penetration curves, given the contact distances
+    over ``inputs.states`` (C's proximity itself, or a penetration query's)."""
+    run = CheckRun(structure, parts, inputs.sim, inputs.states, distances, inputs.proximity, rollout, mounted)
+    return run_checks(run, names), penetration_curves(inputs.sim, inputs.states, distances)
 
 
 def penetration_curves(sim: SimModel, states: StateBatch, distances: np.ndarray) -> dict[int, Any]:

@@ -85,12 +85,12 @@ def repair(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float
             continue
         joint = current.nodes[part].joint
         best = None
-        for kind, tried in alternatives(current, parts, boxes, part):
-            if not set(kind.split(", ")) <= kinds:
-                continue
-            candidate = _written(_with_joint(current, part, tried), boxes)
-            if candidate.nodes[part].joint is None:  # written with 3 decimals it cannot move
-                continue
+        tries = [(kind, _written(_with_joint(current, part, tried), boxes))
+                 for kind, tried in alternatives(current, parts, boxes, part) if set(kind.split(", ")) <= kinds]
+        tries = [(kind, c) for kind, c in tries if c.nodes[part].joint is not None]  # written with 3 decimals it cannot move
+        if check.physics.batches:  # all of this joint's alternatives in one launch; the order below still decides
+            check.many([c for _, c in tries])
+        for kind, candidate in tries:
             found = check(candidate)
             if found.merit() > (best[2] if best else verdict).merit():
                 best = (kind, candidate, found)

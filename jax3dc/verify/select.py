@@ -59,19 +59,25 @@ def choose(candidates: Sequence[Candidate], part_ids: Collection[int], parts: di
     if not candidates:
         raise ValueError("choose needs at least one candidate")
     check = check or VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))
-    rows, structures = [], []
-    for candidate in candidates:
-        try:
-            structure = parse_candidate(candidate.text, part_ids, boxes)
-        except StructureError as e:
-            rows.append(Row(False, e.rule, None, None, candidate.logprob, None))
-            structures.append(None)
-            continue
-        verdict = check(structure)
-        rows.append(Row(True, None, verdict.ok, verdict.flagged, candidate.logprob, verdict))
-        structures.append(structure)
+    parsed = [_parsed(candidate.text, part_ids, boxes) for candidate in candidates]
+    structures = [structure for structure, _ in parsed]
+    verdicts = iter(check.many([s for s in structures if s is not None]))  # together: one MJX launch
+    rows = [Row(False, rule, None, None, c.logprob, None) if structure is None else
+            _row(c.logprob, next(verdicts)) for c, (structure, rule) in zip(candidates, parsed)]
     ranked = sorted(range(len(rows)), key=lambda i: _rank(rows[i]), reverse=True)
     return Choice(ranked[0], structures[ranked[0]], tuple(rows), _reason(rows, ranked))
+
+
+def _parsed(text: str, part_ids: Collection[int], boxes: Mapping[int, Box]) -> tuple[Structure | None, str | None]:
+    """The candidate's structure, or None and the rule it breaks."""
+    try:
+        return parse_candidate(text, part_ids, boxes), None
+    except StructureError as e:
+        return None, e.rule
+
+
+def _row(logprob: float, verdict: Verdict) -> Row:
+    return Row(True, None, verdict.ok, verdict.flagged, logprob, verdict)
 
 
 def _rank(row: Row) -> tuple:

@@ -20,8 +20,8 @@ def test_the_winner_is_parsed_once_and_each_verdict_computed_once(tmp_path, monk
     parsed_again = []
     monkeypatch.setattr(pipeline, "parse_structure", lambda *args, **kwargs: parsed_again.append(args))
     checked = []
-    real = verdicts.Physics.verdict
-    monkeypatch.setattr(verdicts.Physics, "verdict", lambda self, s: checked.append(to_json(s)) or real(self, s))
+    real = verdicts.Physics.verdicts  # what the cache asks for each batch of unseen structures
+    monkeypatch.setattr(verdicts.Physics, "verdicts", lambda self, ss: checked.extend(to_json(s) for s in ss) or real(self, ss))
 
     out = tmp_path / "out"
     result = pipeline.predict(write_image(tmp_path / "image.png"), f"mesh:{write_glb(tmp_path / 'object.glb')}",

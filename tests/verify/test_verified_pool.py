@@ -29,3 +29,17 @@ def test_workers_agree_with_one_process_and_repair_failing_winners(checked_recor
     assert first.choice.index == 1 and first.repaired is None  # the winner passes: nothing to repair
     assert not lone.choice.rows[0].ok and lone.repaired.after.ok and lone.repaired.repairs
     assert door_done.choice.rows[0].ok and door_done.repaired is None
+
+
+def test_mjx_workers_choose_and_repair_as_c(checked_records):
+    """Backend "mjx" with workers: their candidates go to one device service in this process, and
+    the choices, verdicts and repairs are C's."""
+    box = checked_records[BOX]
+    broken = to_json(pivot_moved_away(checked_object(box).target, 2))
+    jobs = [Job(box, (Candidate(broken, -1.0), Candidate(box.target, -3.0))), Job(box, (Candidate(broken, -1.0),))]
+
+    def summary(verified):
+        return [(v.choice.index, v.choice.reason, [r.verdict.to_json()["joints"] for r in v.choice.rows],
+                 v.repaired and [r.to_dict() for r in v.repaired.repairs]) for v in verified]
+
+    assert summary(verify_many(jobs, workers=2, backend="mjx")) == summary(verify_many(jobs, workers=1))

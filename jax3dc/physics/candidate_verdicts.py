@@ -1,0 +1,116 @@
+"""Verdicts of many structures over the same parts (the K candidates of one object, a repair's
+alternatives) with their interpenetration sweeps in one compiled MJX launch.
+
+The structures share the part meshes, so their collision pieces come from one decomposition per
+part and frame (``convex_pieces``' caches: a candidate that moves no part's frame decomposes
+nothing). Each structure's kinematic model, check states and C proximity are built on the CPU as
+``verdict.verdict_with_curves`` builds them; the penetration depths of every structure's states
+then come from one ``mjx_batch`` launch, padded to at least ``START_SHAPES`` and to the largest
+shapes this process has met, so a run over many objects compiles only when a larger object comes.
+In a worker process of a device service (``mjx_service``, as ``physics sweep --backend mjx`` runs
+it) the structures go to the service instead, which launches the requests of all its workers together.
+The rollouts of the dynamic checks run in C, as ``physics sweep --backend mjx`` runs them: each
+structure's reachability model has its own contact pairs, which MJX keeps static, so they cannot
+share a compiled launch, and they are a small share of a verdict (``verify.verdicts``).
+
+With the same models, states, proximity and rollouts, the verdicts differ from the C path's only
+where the two depths of a pair fall on two sides of a tolerance. MJX's is the exact separating-axis
+depth; C's convex solver now and then reads a deep pair deeper: 2 of 63 sampled candidates of 12
+factory objects (``bench/candidates_mjx.py --records 12``) differed so, e.g. a drawer chest's
+drawer at one state of its (perturbed) sweep, 0.033 nu in C against 0.018 nu at that state in MJX and
+at its neighbours in both (tolerance 0.025), which changes a reason or a flagged joint of a
+candidate that fails anyway; the winners and repairs were the same.
+``tests/physics/test_physics_candidate_verdicts.py`` checks winners, verdict lines and repairs.
+"""
+
+from __future__ import annotations
+
+import functools
+import threading
+import time
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+import trimesh
+
+from jax3dc.physics import cpu_backend
+from jax3dc.physics.findings import Verdict
+from jax3dc.physics.verdict import check_names, kinematic_inputs, penetration_model, verdict_from
+from jax3dc.structure.schema import Structure
+
+# On an accelerator the first launch of a process is padded to these (8 candidates of a factory
+# object, or a repair's alternatives, fit them: up to 26 bodies, 1,536 geom pairs and ~100 states a
+# structure), so that the shapes seldom grow. On a CPU padding costs compute in proportion (8
+# cabinet candidates: 2.7 s of broad phase padded so, on 2 cores), so launches start at the size
+# classes they need and grow from there.
+START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=1024, hulls=(64, 384),
+                    hull_sizes=((8, 12, 12), (32, 64, 96)))
+
+
+def start_shapes() -> dict:
+    """What a process's first candidate launch is padded to on this platform (``mjx_batch.Shapes``
+    fields; none on a CPU: the size classes the launch needs)."""
+    import jax
+
+    return {} if jax.default_backend() == "cpu" else START_SHAPES
+
+
+_largest = None  # mjx_batch.Shapes: the largest this process has launched (every launch pads to it)
+_lock = threading.Lock()
+
+
+def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh.Trimesh], scale: float, mounted: bool,
+                       dynamics: bool = True, threads: int | None = None,
+                       timings: dict[str, float] | None = None) -> list[Verdict]:
+    """One verdict per structure (in order) over ``parts`` (nu, ``scale`` metres per nu), the
+    interpenetration of all of them measured in one MJX launch. ``threads``: C rollout threads;
+    ``timings`` gathers seconds per step: the CPU's "kinematic inputs", "penetration models" and
+    "checks" (rollouts included), and the launch's phases (``mjx_batch.batch_pair_distances``)."""
+    if not structures:
+        return []
+    names = check_names(None, dynamics)
+    clock = _Clock(timings)
+    inputs = [kinematic_inputs(s, parts, scale) for s in structures]
+    clock.lap("kinematic inputs")
+    models = [penetration_model(s, parts, i) for s, i in zip(structures, inputs)]
+    clock.lap("penetration models")
+    distances = _launch(models, [i.states.qpos for i in inputs], timings)
+    clock.lap()
+    rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
+    verdicts = [verdict_from(s, parts, i, d, rollout, mounted, names)[0] for s, i, d in zip(structures, inputs, distances)]
+    clock.lap("checks")
+    return verdicts
+
+
+class _Clock:
+    """Seconds per step into ``timings`` (when given)."""
+
+    def __init__(self, timings: dict[str, float] | None):
+        self.timings, self.last = timings, time.perf_counter()
+
+    def lap(self, name: str | None = None) -> None:
+        now = time.perf_counter()
+        if name is not None and self.timings is not None:
+            self.timings[name] = self.timings.get(name, 0.0) + now - self.last
+        self.last = now
+
+
+def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | None) -> list[np.ndarray]:
+    """In a worker of a device service (``mjx_service``), the service's launch, shared with the other
+    workers' requests; else one launch in this process."""
+    global _largest
+    from jax3dc.physics.mjx_service import installed_client
+
+    service = installed_client()
+    if service is not None:
+        return service.many(models, qpos)
+    from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
+
+    with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use
+        warnings.simplefilter("ignore", UserWarning)
+        arrays = [object_arrays(m) for m in models]
+    with _lock:
+        at_least = _largest or Shapes(**start_shapes())
+        distances, _largest = batch_pair_distances(arrays, qpos, at_least, timings)
+    return distances
