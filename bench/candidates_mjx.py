@@ -66,7 +66,7 @@ def _verify(job: _Job, backend: str, threads: int) -> dict:
 
 
 def _jobs(records: int, k: int, repair: bool) -> list[_Job]:
-    from data_pipeline.factories import FACTORIES
+    from jax3dc.factories import FACTORIES
     from eval.verdict_accuracy.candidates import sampled_candidates
     from eval.verdict_accuracy.ground_truth import factory_objects
 

@@ -52,7 +52,7 @@ def _load_split_images(folders: list[Path], size: int) -> dict[str, tuple[list[s
 def main() -> None:
     from flax import nnx
 
-    from data_pipeline.factories.registry import SCHEMAS, run_parameters
+    from jax3dc.factories.registry import SCHEMAS, run_parameters
     from eval.metrics.parameters import score_parameters, summarise
     from eval.parameters_run import table
     from jax3dc.stage1_net import OutputLayout, Stage1Net, Stage1NetConfig, load_network, save_network

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from data_pipeline.factories.registry import SCHEMAS, run_parameters
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.parameters import parse_parameters
 from jax3dc.release import STAGE1_DIR
 from jax3dc.stage1_net import MARKER, load_network, load_reader

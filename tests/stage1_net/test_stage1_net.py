@@ -10,7 +10,7 @@ import pytest
 import safetensors.numpy
 from flax import nnx
 
-from data_pipeline.factories.registry import SCHEMAS, run_parameters
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.errors import InputFileError
 from jax3dc.parameters import parse_parameters
 from jax3dc.stage1_net import (
