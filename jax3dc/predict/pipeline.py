@@ -304,7 +304,8 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
             dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
             mounted: bool | None = None, on_output: OutputListener | None = None, progress: bool = False,
-            max_image_pixels: int = MAX_IMAGE_PIXELS, ground_joints: bool = False) -> PredictResult:
+            max_image_pixels: int = MAX_IMAGE_PIXELS, ground_joints: bool = False,
+            checkpoints: Checkpoints | None = None) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
     ``stage1``: "parameters", "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1); None:
@@ -331,13 +332,15 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
     ``ground_joints``: correct the decoded joints with the part boxes (jax3dc.grounding; a structure
     model folder, not a ``generate_structure``).
     ``max_image_pixels``: a larger image file is refused from its header, before decoding.
+    ``checkpoints``: the loaded models to use (and add to), so that a caller predicting many images
+    loads each checkpoint once; their dtype, not ``dtype``, applies (default: a fresh one).
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
     backend, source = parse_stage1(stage1, stage1_model_dir)  # a bad --stage1 is refused before anything is written
     out.mkdir(parents=True, exist_ok=True)
     outputs = _Outputs(out, on_output)
-    checkpoints = Checkpoints(dtype)
+    checkpoints = checkpoints if checkpoints is not None else Checkpoints(dtype)
     steps = _Progress(progress)
     stage1_settings = _Stage1Settings(code_model_dir, generate_program, read_parameters, max_new_tokens, constrained)
     settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
