@@ -102,10 +102,10 @@ def _stage_export(out: Path, seed: int) -> dict:
             "joints_loaded_in_mujoco": joints, "files": {k: str(v) for k, v in files.items()}}
 
 
-def _predict_one(record, out: Path, checkpoints: Checkpoints) -> tuple[dict, dict | None]:
+def _predict_one(record, joints: int, out: Path, checkpoints: Checkpoints) -> tuple[dict, dict | None]:
     """Predict one held-out test image with its own part meshes (the factory's, from the record's
-    parameters) as stage 1 and the shipped model: the summary entry and the structure (None when
-    predict failed)."""
+    parameters) as stage 1 and the shipped model, told its ``joints`` as the record's prompt does:
+    the summary entry and the structure (None when predict failed)."""
     obj = run_parameters(parse_parameters(record.parameters, SCHEMAS))
     out.mkdir(parents=True, exist_ok=True)
     (out / "input.png").write_bytes(record.image_png)
@@ -113,7 +113,7 @@ def _predict_one(record, out: Path, checkpoints: Checkpoints) -> tuple[dict, dic
     try:
         result = predict(out / "input.png", f"parts:{out / 'input_parts'}", default_structure_model(), out=out / "asset",
                          camera=camera_from_dict(record.meta["camera"], "record camera"), max_new_tokens=1024,
-                         checkpoints=checkpoints)
+                         checkpoints=checkpoints, num_joints=joints or None)
     except Jax3dcError as e:  # keep what was written, say why
         written = sorted(p.name for p in (out / "asset").iterdir()) if (out / "asset").is_dir() else []
         return {"key": record.key, "status": "partial", "out": str(out / "asset"), "reason": str(e),
@@ -145,7 +145,7 @@ def _stage_predict(data: Path, out: Path, count: int) -> dict:
     references = [reference_of(r) for r in records]
     own, structures, pixels = [], {}, []
     for k, (record, reference) in enumerate(zip(records, references)):
-        entry, structure = _predict_one(record, out / f"object_{k}", checkpoints)
+        entry, structure = _predict_one(record, len(reference.structure.joints()), out / f"object_{k}", checkpoints)
         own.append(entry)
         if structure is not None:
             structures[record.key] = structure
