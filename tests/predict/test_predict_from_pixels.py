@@ -8,7 +8,6 @@ from __future__ import annotations
 import json
 
 import mujoco
-import pytest
 
 from jax3dc.cli import main
 from jax3dc.factories.registry import SCHEMAS, run_parameters
@@ -18,7 +17,7 @@ from jax3dc.structure import parse_structure
 from predict_cases import write_image
 
 
-@pytest.mark.slow  # 41 s on 2 shared busy cores (14 s of it predict): both shipped models load and compile
+# 14 s on 2 shared cores (41 s with a benchmark beside it): both shipped models load and compile
 def test_a_bare_image_gives_a_structure_exports_and_a_verdict(tmp_path, capsys):
     image = write_image(tmp_path / "cabinet.png")  # a factory object's render, nothing about it given
     out = tmp_path / "out"
