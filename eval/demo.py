@@ -8,8 +8,10 @@ Stages, each printing one line and where its outputs are:
                 with the MJCF and URDF loaded back in MuJoCo
   4. evaluate   `jax3dc eval run` with the shipped model (jax3dc/release) on held-out test records
   5. baselines  the no-training baselines on the same references; Table 1 of all of them
-  6. predict    `jax3dc predict` on held-out test images: their part meshes as stage 1, the shipped
-                model as stage 2, then the exports and the physics verdict
+  6. predict    `jax3dc predict` on held-out test images, twice each: with their own part meshes as
+                stage 1, and from the image alone (the shipped stage-1 network, jax3dc/release/stage1),
+                the shipped model as stage 2, then the exports and the physics verdict; Table 1 of
+                both on those images (from pixels scored by parts matched by box overlap: eval.pixels)
   7. train      only with --train-minutes > 0: `jax3dc data tokenizer` and the `tiny` preset
                 trained from scratch on the train split for that many CPU minutes (a few minutes
                 of CPU teach it nothing useful; GPUs train the real thing: bench/release_model.py)
@@ -32,18 +34,24 @@ from data_pipeline import tokenizer_cli
 from data_pipeline.build import BuildConfig, factory_sources, run_build
 from data_pipeline.shards import shard_paths
 from eval import cli as eval_cli
-from eval.records import read_records
+from eval.metrics.cases import build_cases
+from eval.metrics.score import evaluate
+from eval.pixels import PixelsResult, predict_record, score_pixels
+from eval.records import read_records, reference_of
 from jax3dc.errors import Jax3dcError
 from jax3dc.export.blender import export_blender
 from jax3dc.export.gltf import export_gltf
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import export_urdf
 from jax3dc.factories import generate_object
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import part_boxes, save_parts
-from jax3dc.predict.pipeline import predict
+from jax3dc.parameters import parse_parameters
+from jax3dc.predict.pipeline import Checkpoints, predict
 from jax3dc.predict.segmentation import camera_from_dict
-from jax3dc.release import default_structure_model
-from jax3dc.structure import canonicalize, save_boxes, to_json
+from jax3dc.predict.stage1_readers import ReaderSettings, load_reader
+from jax3dc.release import default_stage1_model, default_structure_model
+from jax3dc.structure import canonicalize, save_boxes, to_dict, to_json
 from train import cli as train_cli
 
 
@@ -94,31 +102,60 @@ def _stage_export(out: Path, seed: int) -> dict:
             "joints_loaded_in_mujoco": joints, "files": {k: str(v) for k, v in files.items()}}
 
 
-def _predict_one(record, out: Path) -> dict:
-    """Predict one held-out test image with its own part meshes as stage 1 and the shipped model."""
-    obj = generate_object(record.meta["category"], int(record.meta["seed"]))
+def _predict_one(record, joints: int, out: Path, checkpoints: Checkpoints) -> tuple[dict, dict | None]:
+    """Predict one held-out test image with its own part meshes (the factory's, from the record's
+    parameters) as stage 1 and the shipped model, told its ``joints`` as the record's prompt does:
+    the summary entry and the structure (None when predict failed)."""
+    obj = run_parameters(parse_parameters(record.parameters, SCHEMAS))
     out.mkdir(parents=True, exist_ok=True)
     (out / "input.png").write_bytes(record.image_png)
     save_parts(obj.parts, out / "input_parts")
     try:
         result = predict(out / "input.png", f"parts:{out / 'input_parts'}", default_structure_model(), out=out / "asset",
                          camera=camera_from_dict(record.meta["camera"], "record camera"), max_new_tokens=1024,
-                         dtype="float32")
+                         checkpoints=checkpoints, num_joints=joints or None)
     except Jax3dcError as e:  # keep what was written, say why
         written = sorted(p.name for p in (out / "asset").iterdir()) if (out / "asset").is_dir() else []
-        return {"key": record.key, "status": "partial", "out": str(out / "asset"), "reason": str(e), "written": written}
+        return {"key": record.key, "status": "partial", "out": str(out / "asset"), "reason": str(e),
+                "written": written}, None
     verdict = result.verdict or {}
     return {"key": record.key, "status": "done", "out": str(out / "asset"), "joints": len(result.structure.joints()),
-            "physics_ok": verdict.get("ok"), "files": {k: str(v) for k, v in result.files.items()}}
+            "physics_ok": verdict.get("ok"), "files": {k: str(v) for k, v in result.files.items()}}, \
+        to_dict(result.structure)
+
+
+def _pixels_entry(result: PixelsResult, out: Path) -> dict:
+    stage1 = result.stage1
+    return {"key": result.key, "status": "partial" if result.failure else "done", "out": str(out),
+            "reason": result.failure, "seconds": round(result.seconds, 1), "physics_ok": result.physics_ok,
+            "parts_matched": result.matched, "parts_extra": result.extra, "parts_missing": result.missing,
+            "category_right": stage1.category if stage1 else None,
+            "matched_iou": round(100 * stage1.matched_iou, 1) if stage1 else None}
 
 
 def _stage_predict(data: Path, out: Path, count: int) -> dict:
-    records = itertools.islice(read_records(shard_paths([data], "test"), "test"), count)
-    results = [_predict_one(record, out / f"object_{k}") for k, record in enumerate(records)]
-    if not results:
+    records = list(itertools.islice(read_records(shard_paths([data], "test"), "test"), count))
+    if not records:
         raise Jax3dcError(f"demo: no test records in {data} to predict")
-    status = "done" if all(r["status"] == "done" for r in results) else "partial"
-    return {"status": status, "out": str(out), "objects": results}
+    stage1_model = default_stage1_model()
+    if stage1_model is None:
+        raise Jax3dcError("demo: no stage-1 model ships with this install (jax3dc/release/stage1)")
+    checkpoints = Checkpoints("float32")  # one structure model for both runs of every image
+    reader = load_reader(stage1_model, ReaderSettings(checkpoints.get, 1024, True))
+    references = [reference_of(r) for r in records]
+    own, structures, pixels = [], {}, []
+    for k, (record, reference) in enumerate(zip(records, references)):
+        entry, structure = _predict_one(record, len(reference.structure.joints()), out / f"object_{k}", checkpoints)
+        own.append(entry)
+        if structure is not None:
+            structures[record.key] = structure
+        pixels.append(predict_record(record, reference, out / f"object_{k}" / "pixels", reader, checkpoints))
+    rows = {"own parts": evaluate(build_cases(references, structures)).metrics,
+            "from pixels": score_pixels(references, pixels).metrics}
+    status = "done" if all(e["status"] == "done" for e in own) and not any(p.failure for p in pixels) else "partial"
+    return {"status": status, "out": str(out), "objects": own,
+            "pixels": [_pixels_entry(p, out / f"object_{k}" / "pixels") for k, p in enumerate(pixels)],
+            "metrics": {name: {c: m.get(c) for c in COLUMNS} for name, m in rows.items()}}
 
 
 def _stage_train(data: Path, out: Path, minutes: float) -> dict:
@@ -198,7 +235,8 @@ def run_demo(out: Path, size: str = "default", seed: int = 0, train_minutes: flo
            metrics={name: {k: rows[name].get(k) for k in COLUMNS} for name in ("heuristic", "star")})
 
     t = time.perf_counter()
-    record("predict", t, **_stage_predict(data, out / "predict", spec.predict_images))
+    predicted = _stage_predict(data, out / "predict", spec.predict_images)
+    record("predict", t, **predicted)
 
     if train_minutes > 0:
         t = time.perf_counter()
@@ -207,6 +245,9 @@ def run_demo(out: Path, size: str = "default", seed: int = 0, train_minutes: flo
     summary = {"size": size, "seed": seed, "stages": stages}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     print(f"\nTable 1 on {m['counts']['objects']} held-out test records (%; pos_err in nu):\n" + table_1(rows),
+          flush=True)
+    print(f"\nTable 1 on the {len(predicted['objects'])} held-out images predicted end to end, stage 1 from the "
+          f"image's own parts and from the image alone (%; pos_err in nu):\n" + table_1(predicted["metrics"]),
           flush=True)
     print(f"[demo] summary: {out / 'summary.json'}", flush=True)
     return summary

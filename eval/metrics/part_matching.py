@@ -19,23 +19,40 @@ import trimesh
 from scipy.optimize import linear_sum_assignment
 
 from eval.metrics.programs import box_iou
+from jax3dc.structure import Box
 
 
-def _bounds(parts: Mapping[int, trimesh.Trimesh]) -> list[np.ndarray]:
-    return [np.asarray(parts[pid].bounds, dtype=np.float64) for pid in sorted(parts)]
+Bounds = Mapping[int, np.ndarray]
+"""Part id -> its axis-aligned box as [[lo xyz], [hi xyz]] (nu)."""
 
 
-def match_parts(reference: Mapping[int, trimesh.Trimesh],
-                predicted: Mapping[int, trimesh.Trimesh]) -> list[tuple[int, int, float]]:
+def _mesh_bounds(parts: Mapping[int, trimesh.Trimesh]) -> dict[int, np.ndarray]:
+    """The box of each part mesh."""
+    return {pid: np.asarray(parts[pid].bounds, dtype=np.float64) for pid in parts}
+
+
+def box_bounds(boxes: Mapping[int, Box]) -> dict[int, np.ndarray]:
+    """The box of each centroid-and-extent Box (a record's meta boxes, a legend's)."""
+    return {pid: np.asarray([np.subtract(b.centroid, np.divide(b.extent, 2)),
+                             np.add(b.centroid, np.divide(b.extent, 2))], dtype=np.float64)
+            for pid, b in boxes.items()}
+
+
+def match_bounds(reference: Bounds, predicted: Bounds) -> list[tuple[int, int, float]]:
     """(reference id, predicted id, box IoU) of the one-to-one pairing with the largest summed
     IoU; pairs that do not overlap at all are left out."""
     if not reference or not predicted:
         return []
     ref_ids, pred_ids = sorted(reference), sorted(predicted)
-    ref_boxes, pred_boxes = _bounds(reference), _bounds(predicted)
-    iou = np.asarray([[box_iou(a, b) for b in pred_boxes] for a in ref_boxes])
+    iou = np.asarray([[box_iou(reference[r], predicted[p]) for p in pred_ids] for r in ref_ids])
     rows, cols = linear_sum_assignment(iou, maximize=True)
     return [(ref_ids[r], pred_ids[c], float(iou[r, c])) for r, c in zip(rows, cols) if iou[r, c] > 0]
+
+
+def match_parts(reference: Mapping[int, trimesh.Trimesh],
+                predicted: Mapping[int, trimesh.Trimesh]) -> list[tuple[int, int, float]]:
+    """``match_bounds`` of two sets of part meshes."""
+    return match_bounds(_mesh_bounds(reference), _mesh_bounds(predicted))
 
 
 def matched_iou(reference: Mapping[int, trimesh.Trimesh], predicted: Mapping[int, trimesh.Trimesh]) -> float:

@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
                      scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
                      constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
                      mounted=args.mounted, on_output=show, progress=True, max_image_pixels=args.max_image_pixels,
-                     ground_joints=args.ground_joints)
+                     ground_joints=args.ground_joints, num_joints=args.joints)
     verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
     held = " with its root held (mounted)" if result.mounted else ""
@@ -109,6 +109,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--ground-joints", action="store_true",
                    help="correct each joint's type, axis and hinge line with the part boxes (off by default: on the "
                    "release-3 benchmark it did not raise success on held-out real objects; docs/runs/grounding_20261128)")
+    p.add_argument("--joints", type=positive_int, metavar="N",
+                   help="how many joints the object has, told to the structure model as in its training prompts "
+                   "(default: the count of the object stage 1 names with --stage1 parameters; none for the other "
+                   "backends, and without it the shipped model writes few or no joints)")
     p.add_argument("--mounted", action=argparse.BooleanOptionalAction, default=None,
                    help="the object is fixed in place in use (a faucet, a toilet, a door or window frame): the "
                         "physics check holds its root instead of standing it free on a floor, the candidates "

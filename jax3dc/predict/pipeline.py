@@ -304,7 +304,8 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
             scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
             dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
             mounted: bool | None = None, on_output: OutputListener | None = None, progress: bool = False,
-            max_image_pixels: int = MAX_IMAGE_PIXELS, ground_joints: bool = False) -> PredictResult:
+            max_image_pixels: int = MAX_IMAGE_PIXELS, ground_joints: bool = False,
+            checkpoints: Checkpoints | None = None, num_joints: int | None = None) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
     ``stage1``: "parameters", "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1); None:
@@ -331,13 +332,18 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
     ``ground_joints``: correct the decoded joints with the part boxes (jax3dc.grounding; a structure
     model folder, not a ``generate_structure``).
     ``max_image_pixels``: a larger image file is refused from its header, before decoding.
+    ``num_joints``: how many joints the object has, written into the prompt's ``Joints:`` line as in
+    training (SPEC §3); None: the count stage 1 knows (the parameters backend's factory object), else
+    no line (the shipped structure model then writes few or no joints).
+    ``checkpoints``: the loaded models to use (and add to), so that a caller predicting many images
+    loads each checkpoint once; their dtype, not ``dtype``, applies (default: a fresh one).
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
     backend, source = parse_stage1(stage1, stage1_model_dir)  # a bad --stage1 is refused before anything is written
     out.mkdir(parents=True, exist_ok=True)
     outputs = _Outputs(out, on_output)
-    checkpoints = Checkpoints(dtype)
+    checkpoints = checkpoints if checkpoints is not None else Checkpoints(dtype)
     steps = _Progress(progress)
     stage1_settings = _Stage1Settings(code_model_dir, generate_program, read_parameters, max_new_tokens, constrained)
     settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
@@ -352,7 +358,7 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
         boxes = part_boxes(parts_in.parts)
         camera_given = camera is not None
         camera = camera or default_camera(parts_in.parts)
-        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, None), outputs.files,
+        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, num_joints if num_joints is not None else parts_in.joints), outputs.files,
                                mounted=settings.mounted)
         outputs.text("prompt", "prompt.txt", result.prompt)
         save_parts(parts_in.parts, out / "parts")

@@ -26,10 +26,11 @@ from pathlib import Path
 import trimesh
 
 from jax3dc.errors import InputFileError, ProgramError
-from jax3dc.geometry.parts import load_parts, normalise_parts
+from jax3dc.geometry.parts import load_parts, normalise_parts, part_boxes
 from jax3dc.predict.mesh_input import load_segmented_mesh
 from jax3dc.program.interpreter import run_program
 from jax3dc.release import default_stage1_model
+from jax3dc.structure import canonicalize
 
 PARAMETERS = "parameters"
 CODE = "code"
@@ -49,6 +50,7 @@ class Stage1:
     source: str  # "parameters", "code", or the mesh file's / parts folder's path
     program: str | None = None
     category: str | None = None  # the factory's, for the parameters backend (it decides whether the object is mounted)
+    joints: int | None = None  # the factory's object's joint count, for the parameters backend (the prompt's Joints: line)
 
 
 def parse_stage1(spec: str | None, stage1_model: str | Path | None = None) -> tuple[str, Path | None]:
@@ -108,4 +110,5 @@ def stage1_from_parameters(text: str) -> Stage1:
     from jax3dc.parameters import parse_parameters
 
     obj = run_parameters(parse_parameters(text, SCHEMAS))
-    return Stage1(obj.parts, dict(obj.names), obj.scale_m_per_nu, PARAMETERS, obj.program_text, obj.category)
+    joints = len(canonicalize(obj.structure, part_boxes(obj.parts)).joints())  # as a record's prompt counts them
+    return Stage1(obj.parts, dict(obj.names), obj.scale_m_per_nu, PARAMETERS, obj.program_text, obj.category, joints)

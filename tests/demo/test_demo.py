@@ -21,6 +21,13 @@ def test_tiny_demo_runs_every_stage_with_the_shipped_model(tmp_path, capsys):
     assert isinstance(predicted["physics_ok"], bool)
     for name in ("structure", "mjcf", "urdf"):
         assert name in predicted["files"]
+    # The same image from pixels alone (the shipped stage-1 network), scored by matched parts beside it.
+    pixels = stages["predict"]["pixels"][0]
+    assert pixels["key"] == predicted["key"] and pixels["status"] == "done", pixels
+    assert pixels["parts_matched"] >= 1 and isinstance(pixels["physics_ok"], bool)
+    assert (out / "predict" / "object_0" / "pixels" / "structure.json").is_file()
+    rows = stages["predict"]["metrics"]
+    assert rows["own parts"]["parse"] == rows["from pixels"]["parse"] == 100.0
     assert stages["train"]["steps"] >= 1 and (out / "train" / "hf" / "tokenizer.json").is_file()
 
     ref = stages["reference"]
@@ -41,3 +48,4 @@ def test_tiny_demo_runs_every_stage_with_the_shipped_model(tmp_path, capsys):
         assert mujoco.MjModel.from_xml_path(files[fmt]).njnt == export["joints_in_structure"]
     printed = capsys.readouterr().out
     assert "summary.json" in printed and "predict" in printed and "paper (Ours)" in printed
+    assert "from pixels" in printed and "own parts" in printed

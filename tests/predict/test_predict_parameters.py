@@ -191,3 +191,20 @@ def test_a_category_fixed_in_place_is_mounted_unless_told(image, tmp_path):
     assert mounted == {"default": True, "told": False, "stapler": False}
     assert "<freejoint" not in (tmp_path / "default" / "object.xml").read_text()
     assert "<freejoint" in (tmp_path / "told" / "object.xml").read_text()
+
+
+def test_stage_2_is_told_the_joints_of_stage_1s_object_as_in_training(image, tmp_path, monkeypatch):
+    monkeypatch.setattr(release, "STAGE1_DIR", fake_net_folder(tmp_path / "stage1", monkeypatch, []))
+    prompts: list[str] = []
+
+    def star(prompt: str) -> str:
+        prompts.append(prompt)
+        return rigid_star(prompt)
+
+    predict(image, out=tmp_path / "a", camera=CAMERA, generate_structure=star)
+    joints = len(run_parameters(parse_parameters(GOOD, SCHEMAS)).structure.joints())
+    assert joints >= 1 and f"Joints: {joints}" in prompts[0].splitlines()
+    predict(image, out=tmp_path / "b", camera=CAMERA, generate_structure=star, num_joints=5)
+    assert "Joints: 5" in prompts[1].splitlines()  # the caller's count wins
+    predict(image, f"parts:{tmp_path / 'a' / 'parts'}", out=tmp_path / "c", camera=CAMERA, generate_structure=star)
+    assert not any(line.startswith("Joints") for line in prompts[2].splitlines())  # a parts folder names no count
