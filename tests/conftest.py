@@ -8,23 +8,13 @@ an in-process `jax3dc train` leaves this process's persistent cache off (the env
 JAX read its settings at import): the suite's own compiles are not written to disk, where one
 serialisation crashed a run, while commands started in subprocesses cache in the session's folder."""
 
-import faulthandler
 import os
 import sys
 
 import pytest
-from _pytest.faulthandler import fault_handler_stderr_fd_key
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-@pytest.hookimpl(trylast=True)  # after pytest's own faulthandler plugin has opened its stderr copy
-def pytest_configure(config: pytest.Config) -> None:
-    """A native crash prints the crashing thread alone: with every thread's stack the CI log's tail
-    held only idle pool workers and cut the one frame that names the test."""
-    if fault_handler_stderr_fd_key in config.stash:
-        faulthandler.enable(file=config.stash[fault_handler_stderr_fd_key], all_threads=False)
 
 
 def pytest_runtest_logstart(nodeid: str, location: tuple) -> None:
