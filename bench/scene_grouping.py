@@ -48,13 +48,7 @@ def legend_of_sets(sets: Path) -> dict[str, dict]:
 
 def partition(s: Structure) -> list[list[int]]:
     """The parts of each tree, as sorted lists."""
-    top = {}
-    for p in s.nodes:
-        q = p
-        while s.nodes[q].parent is not None:
-            q = s.nodes[q].parent
-        top[p] = q
-    return sorted(sorted(p for p in s.nodes if top[p] == r) for r in set(top.values()))
+    return sorted(sorted(s.subtree(r)) for r in s.roots())
 
 
 def built_scenes(count: int) -> Counter:

@@ -28,13 +28,7 @@ def structure(parents: dict[int, int | None], joints: dict[int, Joint] | None = 
 
 
 def groups(s: Structure) -> list[list[int]]:
-    root_of = {}
-    for p in s.nodes:
-        q = p
-        while s.nodes[q].parent is not None:
-            q = s.nodes[q].parent
-        root_of[p] = q
-    return sorted(sorted(p for p in s.nodes if root_of[p] == r) for r in set(root_of.values()))
+    return sorted(sorted(s.subtree(r)) for r in s.roots())
 
 
 # A table (top 1 on legs 2, 3) with a kettle (body 4, lid 5) on its top, and a bucket 6 on the floor.
