@@ -358,7 +358,8 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
         boxes = part_boxes(parts_in.parts)
         camera_given = camera is not None
         camera = camera or default_camera(parts_in.parts)
-        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, num_joints if num_joints is not None else parts_in.joints), outputs.files,
+        joints = num_joints if num_joints is not None else parts_in.joints
+        result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, joints), outputs.files,
                                mounted=settings.mounted)
         outputs.text("prompt", "prompt.txt", result.prompt)
         save_parts(parts_in.parts, out / "parts")

@@ -26,7 +26,9 @@ from pathlib import Path
 import trimesh
 
 from jax3dc.errors import InputFileError, ProgramError
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import load_parts, normalise_parts, part_boxes
+from jax3dc.parameters import parse_parameters
 from jax3dc.predict.mesh_input import load_segmented_mesh
 from jax3dc.program.interpreter import run_program
 from jax3dc.release import default_stage1_model
@@ -106,9 +108,6 @@ def stage1_from_program(text: str) -> Stage1:
 
 def stage1_from_parameters(text: str) -> Stage1:
     """Runs a factory parameter text; a text that does not fit its schema raises ParameterError naming the entry."""
-    from jax3dc.factories.registry import SCHEMAS, run_parameters
-    from jax3dc.parameters import parse_parameters
-
     obj = run_parameters(parse_parameters(text, SCHEMAS))
     joints = len(canonicalize(obj.structure, part_boxes(obj.parts)).joints())  # as a record's prompt counts them
     return Stage1(obj.parts, dict(obj.names), obj.scale_m_per_nu, PARAMETERS, obj.program_text, obj.category, joints)
