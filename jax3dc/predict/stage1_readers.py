@@ -15,6 +15,7 @@ from typing import Any, Callable
 import numpy as np
 
 from jax3dc.errors import InputFileError
+from jax3dc.predict.models import parameters_model
 from jax3dc.stage1_net import load_reader as load_image_network
 
 Reader = Callable[[np.ndarray], str]
@@ -41,8 +42,6 @@ class ReaderKind:
 
 
 def _language_model(folder: Path, settings: ReaderSettings) -> Reader:
-    from jax3dc.predict.models import parameters_model
-
     return parameters_model(settings.sampler(folder), settings.max_new_tokens, settings.constrained)
 
 
