@@ -66,6 +66,8 @@ def main() -> None:
     p.add_argument("--render-size", type=int, default=128, help="image side of the build")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--image-size", type=int, default=96, help="image side the network reads")
+    p.add_argument("--widths", type=int, nargs="+", default=[32, 48, 96, 128], help="channels of the residual blocks")
+    p.add_argument("--hidden", type=int, default=192, help="width of the layer the heads read")
     p.add_argument("--steps", type=int, default=3000)
     p.add_argument("--minutes", type=float, default=10.0, help="training stops after this many minutes")
     p.add_argument("--batch", type=int, default=64)
@@ -91,7 +93,8 @@ def main() -> None:
     print(f"[stage1_net] records: {({k: len(v) for k, v in sets.items()})} loaded in {time.perf_counter() - t:.0f} s",
           flush=True)
 
-    model = Stage1Net(Stage1NetConfig.for_layout(layout, image_size=a.image_size), nnx.Rngs(a.seed))
+    model = Stage1Net(Stage1NetConfig.for_layout(layout, image_size=a.image_size, widths=tuple(a.widths),
+                                                       hidden=a.hidden), nnx.Rngs(a.seed))
     config = TrainConfig(steps=a.steps, batch=a.batch, lr=a.lr, time_limit_s=a.minutes * 60, seed=a.seed)
     t = time.perf_counter()
     log = train(model, sets["train"], layout, config, on_log=lambda row: print(f"[stage1_net] {row}", flush=True))
@@ -101,7 +104,8 @@ def main() -> None:
 
     package = out / "stage1"
     recipe = (f"nice -n 10 python3 -m bench.stage1_net --objects {' '.join(map(str, a.objects))} "
-              f"--image-size {a.image_size} --steps {a.steps} --minutes {a.minutes}")
+              f"--image-size {a.image_size} --widths {' '.join(map(str, a.widths))} --hidden {a.hidden} "
+              f"--steps {a.steps} --minutes {a.minutes}")
     save_network(package, model, SCHEMAS, notes={"recipe": recipe, "train_records": len(sets["train"]),
                                                  "steps": log[-1]["step"]})
     weights = (package / "model.safetensors").stat().st_size

@@ -23,6 +23,7 @@ from typing import Callable
 from tqdm import tqdm
 
 from data_pipeline.augment import merge_parts, split_part
+from data_pipeline.mirror import mirrored
 from data_pipeline.samples import SourceObject, derived_rng, factory_source, object_records, split_of
 from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
 from jax3dc.errors import InputFileError, SetupError
@@ -56,6 +57,8 @@ class BuildConfig:
     augment: bool = False  # also one split and one merge variant per object (one view each)
     split: str = "hash"  # "hash": by SHA-256 of the object id; "train" / "val" / "test": every object there
     appearance: str = "plain"  # look of I: "plain" (one look) or "varied" (lights, backdrop, colours, camera)
+    mirror: bool = False  # also every view of each object's mirror image (data_pipeline.mirror)
+    palette_per_view: bool = False  # S colours permuted per view, not per object: no colour set names an object
 
 
 SPLIT_CHOICES = ("hash", "train", "val", "test")
@@ -133,6 +136,9 @@ def config_doc(config: BuildConfig) -> dict:
     doc = asdict(config)
     if doc.get("appearance") == "plain":
         del doc["appearance"]
+    for flag in ("mirror", "palette_per_view"):  # absent when off: the manifests of older builds still match
+        if not doc.get(flag):
+            doc.pop(flag, None)
     return doc
 
 
@@ -143,14 +149,17 @@ def spec_records(spec: SourceSpec, split: str, config: BuildConfig):
         tqdm.write(f"warning: {spec.object_id}: {warning}", file=sys.stderr)
     for obj in objects:
         yield from object_records(obj, config.views, config.seed, config.size, split=split,
-                                  appearance=config.appearance)
+                                  appearance=config.appearance, palette_per_view=config.palette_per_view)
+    if config.mirror and spec.kind != "scene":
+        yield from object_records(mirrored(objects[0]), config.views, config.seed, config.size, split=split,
+                                  appearance=config.appearance, palette_per_view=config.palette_per_view)
     if config.augment and spec.kind != "scene":
         obj = objects[0]
         rng = derived_rng(config.seed, "augment", obj.object_id)
         for variant in (split_part(obj, rng), merge_parts(obj, rng)):
             if variant is not None:
                 yield from object_records(variant, 1, config.seed, config.size, split=split,
-                                          appearance=config.appearance)
+                                          appearance=config.appearance, palette_per_view=config.palette_per_view)
 
 
 def error_line(error: BaseException) -> str:

@@ -58,6 +58,10 @@ def _common(parser: argparse.ArgumentParser) -> None:
                         "background, material colours, fixed field of view (default); varied = random lights, "
                         "sky / floor, jittered part colours and textures, camera distance and field of view, "
                         "all from the build seed")
+    parser.add_argument("--mirror", action="store_true",
+                        help="also render every view of each object's mirror image (x -> -x; hinges change side)")
+    parser.add_argument("--palette-per-view", action="store_true",
+                        help="permute S's colours per view instead of per object (a training augmentation)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
 
 
@@ -99,7 +103,7 @@ def _run(args: argparse.Namespace, sources: list) -> int:
         raise SystemExit("--views, --workers, --objects-per-shard must be >= 1 and --size >= 16")
     config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard,
                          augment=args.augment, split=getattr(args, "split", "hash"),
-                         appearance=args.appearance)
+                         appearance=args.appearance, mirror=args.mirror, palette_per_view=args.palette_per_view)
     manifest = run_build(args.out, sources, config, args.workers, progress=not args.quiet)
     total = sum(s["records"] for s in manifest["shards"].values())
     skipped = len(manifest.get("skipped", {}))

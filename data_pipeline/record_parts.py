@@ -20,6 +20,7 @@ import trimesh
 
 from data_pipeline.augment import merge_parts, split_part
 from data_pipeline.build import SourceSpec, load_sources
+from data_pipeline.mirror import AUGMENTATION as MIRROR, mirrored
 from data_pipeline.record import Record
 from data_pipeline.samples import SourceObject, derived_rng
 from data_pipeline.views import move_joint
@@ -87,8 +88,10 @@ def _source_object(record: Record, sources: Mapping[str, Path]) -> SourceObject:
 
 
 def _augmented(source: SourceObject, record: Record) -> SourceObject:
-    """The split or merge variant the build made, replayed with the build's generator (both are
+    """The mirror image, or the split or merge variant the build made, replayed with the build's generator (both are
     drawn from it in that order, as in ``data_pipeline.build.spec_records``)."""
+    if record.meta["augmentation"] == MIRROR:
+        return mirrored(source)
     rng = derived_rng(record.meta["seed"], "augment", source.object_id)
     for variant in (split_part(source, rng), merge_parts(source, rng)):
         if variant is not None and variant.augmentation == record.meta["augmentation"]:

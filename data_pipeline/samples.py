@@ -65,7 +65,7 @@ def derived_rng(*keys: object) -> np.random.Generator:
 
 
 def object_records(obj: SourceObject, views: int, seed: int, size: int, split: str | None = None,
-                   appearance: str = "plain") -> list[Record]:
+                   appearance: str = "plain", palette_per_view: bool = False) -> list[Record]:
     """``views`` records of ``obj``: view 0 at rest, later views each with one joint moved.
     ``meta["split"]`` is ``split``, else ``split_of(obj.object_id)``.
 
@@ -73,7 +73,10 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
     textures, camera distance and field of view drawn from their own generators, derived from the
     object's keys plus "appearance" (per object) and the view number (per view); the poses,
     azimuth and elevation come from the object's generator exactly as in "plain", so S of a
-    varied view equals the plain S of the same pose and camera."""
+    varied view equals the plain S of the same pose and camera.
+
+    ``palette_per_view``: each view's S and legend take the palette of its own key (a training
+    augmentation: colours then name no object, so a model cannot recall an answer by them)."""
     if appearance not in APPEARANCES:
         raise ValueError(f"appearance must be one of {', '.join(APPEARANCES)}, not {appearance!r}")
     keys = (seed, obj.category, obj.object_id, obj.augmentation or "")
@@ -101,6 +104,7 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
             visible = set(np.unique(ids).tolist()) - {0}
             tail = [t for t in (obj.augmentation, None if obj.granularity == "part" else obj.granularity) if t]
             key = "/".join([obj.category, obj.object_id, str(view), *tail])
+            view_palette = object_palette(obj.category, key) if palette_per_view else palette
             meta = {
                 "category": obj.category, "object_id": obj.object_id, "seed": seed, "view": view,
                 "split": split or split_of(obj.object_id), "granularity": obj.granularity,
@@ -111,9 +115,11 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
             }
             if look is not None:
                 meta["appearance"] = appearance
+            if palette_per_view:
+                meta["palette_key"] = key
             records.append(Record(
-                key=key, image_png=png_bytes(rgb), seg_png=png_bytes(paint_segmentation(ids, palette)),
-                prompt=build_prompt(boxes, palette, len(structure.joints()) or None),
+                key=key, image_png=png_bytes(rgb), seg_png=png_bytes(paint_segmentation(ids, view_palette)),
+                prompt=build_prompt(boxes, view_palette, len(structure.joints()) or None),
                 target=to_json(structure), program=obj.program,
                 parameters=obj.parameters, meta=meta))
         return records
