@@ -14,13 +14,13 @@ by side on every set. Lines whose key is in no set are dropped; changed keys go 
 applies it to one predictions file of `jax3dc eval run --no-scene-grouping` over SHARDS (every split),
 for `jax3dc eval run --predictions GROUPED.jsonl` to score beside the raw run.
 
-    python3 -m bench.scene_grouping --built-scenes 200
+    python3 -m bench.scene_grouping --built-scenes 200 [--seed 0]
 
-measures the step without a model: the first N scenes of a `data build --scenes N` (seed 0, no
+measures the step without a model: the first N scenes of a `data build --scenes N --seed S` (no
 rendering), their objects wired together as a model does it (each object root but the first two
 hung rigidly from a random part of another object), regrouped from legend-rounded boxes; it prints
 the share of scenes whose object partition comes back whole, per split and granularity (the
-thresholds were set on the train split).
+thresholds were set on the train split of seed 0; another seed is a check on scenes they never saw).
 """
 
 from __future__ import annotations
@@ -51,15 +51,16 @@ def partition(s: Structure) -> list[list[int]]:
     return sorted(sorted(s.subtree(r)) for r in s.roots())
 
 
-def built_scenes(count: int) -> Counter:
-    """(split, granularity, outcome) counts over the first ``count`` built scenes (module docstring)."""
+def built_scenes(count: int, seed: int = 0) -> Counter:
+    """(split, granularity, outcome) counts over the first ``count`` built scenes of a build with
+    ``seed`` (module docstring)."""
     from data_pipeline.samples import derived_rng, split_of
     from data_pipeline.scenes import make_scene
     from jax3dc.geometry.parts import part_boxes
 
     out: Counter = Counter()
     for index in range(count):
-        for scene in make_scene(0, index):
+        for scene in make_scene(seed, index):
             boxes = {p: Box(tuple(round(v, 3) for v in b.centroid), tuple(round(v, 3) for v in b.extent))
                      for p, b in part_boxes(scene.parts).items()}
             ref, rng = scene.structure, derived_rng("wired", index, scene.granularity)
@@ -101,6 +102,7 @@ def main(argv: Iterable[str] | None = None) -> list[str]:
     p.add_argument("--bench", help="a bench.real_objects output folder (sets/, model/)")
     p.add_argument("--out", help="folder to write (a bench.real_objects folder for --score-only)")
     p.add_argument("--built-scenes", type=int, default=0, metavar="N", help="measure on N built scenes instead")
+    p.add_argument("--seed", type=int, default=0, help="build seed of --built-scenes (default 0)")
     p.add_argument("--predictions", help="one predictions JSONL to regroup (with --data and --out FILE)")
     p.add_argument("--data", nargs="+", default=[], help="the shards --predictions was made on (every split)")
     a = p.parse_args(None if argv is None else list(argv))
@@ -112,7 +114,7 @@ def main(argv: Iterable[str] | None = None) -> list[str]:
         print(f"{len(changed)} predictions regrouped; wrote {a.out}")
         return changed
     if a.built_scenes:
-        counts = built_scenes(a.built_scenes)
+        counts = built_scenes(a.built_scenes, a.seed)
         for split, granularity in sorted({k[:2] for k in counts}):
             n = counts[(split, granularity, "scenes")]
             print(f"{split:5s} {granularity:6s} {n:4d} scenes, whole object partition: "

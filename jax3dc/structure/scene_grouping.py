@@ -8,7 +8,8 @@ objects). This step reads the object partition from the legend boxes and fixes t
 1. **Bodies**: parts whose boxes touch (gap at most ``tol`` on every axis) are joined; each
    connected set is one body.
 2. **Supports**: inside a body, the lowest horizontal plane with every part wholly above or wholly
-   below it, where each upper piece stands inside the top face of one lower part (footprint centre
+   below it (a part within ``tol`` of both sides is above when its centre is: an item's base can be
+   thinner than the legend's rounding), where each upper piece stands inside the top face of one lower part (footprint centre
    inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at least ``HEIGHT_SHARE`` of
    the lower side's, and the lower side at least ``HOST_SHARE`` of the scene's height), separates
    items from the furniture they stand on. An item is not cut again (its lid rests on its body);
@@ -98,7 +99,7 @@ def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float,
     row = {pid: k for k, pid in enumerate(ids)}
     for z in sorted(set(np.round(hi[:, 2], 6))):
         above, below = lo[:, 2] >= z - tol, hi[:, 2] <= z + tol
-        upper = above & ~below
+        upper = above & ((lo[:, 2] + hi[:, 2]) / 2 > z)  # a base thinner than tol is still above
         lower = ~upper
         if not (above | below).all() or not upper.any() or not lower.any():
             continue
