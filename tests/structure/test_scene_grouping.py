@@ -196,3 +196,17 @@ def test_an_item_whose_base_is_thinner_than_the_contact_tolerance_is_cut_at_its_
     assert object_groups(boxes) == [[1, 2, 3], [4, 5, 6]]
     s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: None})
     assert groups(regroup(s, boxes)) == [[1, 2, 3], [4, 5, 6]]
+
+
+SLIDE = Joint("slide", (0.0, 1.0, 0.0), (0.0, 0.0, 0.0), (-0.2, 0.0))
+
+
+def test_a_joint_keeps_a_tray_hanging_under_the_desk_top_but_not_a_cabinet_standing_beside_it() -> None:
+    # Desk top 1 on legs 2, 3; tray 4 hangs 0.03 nu under the top; cabinet 5 stands 0.03 nu beside
+    # the desk; a second tree (bucket 6) says the model read a scene.
+    boxes = {**{k: TABLE_SCENE[k] for k in (1, 2, 3, 6)}, 4: box((-0.3, -0.2, -0.1), (0.0, 0.15, -0.03)),
+             5: box((0.23, -0.2, -0.5), (0.28, 0.2, 0.05))}
+    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 1, 6: None}, {4: SLIDE, 5: SLIDE})
+    out = regroup(s, boxes)
+    assert groups(out) == [[1, 2, 3, 4], [5], [6]]
+    assert out.nodes[4] == s.nodes[4] and out.nodes[5].parent is None
