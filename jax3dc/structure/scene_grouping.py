@@ -22,9 +22,11 @@ objects). This step reads the object partition from the legend boxes and fixes t
    model's edges are kept, and a piece left without its parent hangs, with the joint it had, from
    the nearest part of its object outside its own subtree.
 
-The step runs only where the model wrote several trees (it read a scene): a single object's parts
-need not touch (a lifted lid, a desk's keyboard tray, knobs on a stove top), so geometry alone would
-split it, and a structure of one tree is left exactly as written. Parts the legend gives no box
+The step runs only on a scene: where the model wrote several trees, or where the legend shows two
+bodies standing apart on the floor (pieces of furniture side by side; no single object of the
+procedural build or the real sets has two). A single object's parts need not touch (a lifted lid, a
+desk's keyboard tray, knobs on a stove top), so geometry alone would split it, and one tree over a
+legend without two such bodies is left exactly as written. Parts the legend gives no box
 follow their parent. A valid structure stays valid: ids, materials and relations are kept, and
 every cut leaves a forest.
 """
@@ -135,6 +137,17 @@ def bodies(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[lis
     return _components(ids, _touching(lo, hi, tol))
 
 
+def stands_apart(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> bool:
+    """Whether at least two bodies stand on the floor (their lowest points within ``tol`` of the
+    lowest of all boxes): the legend of a scene, read before the model's trees (module docstring)."""
+    if not boxes:
+        return False
+    ids, lo, _ = _corners(boxes, boxes)
+    row = {pid: k for k, pid in enumerate(ids)}
+    floor = lo[:, 2].min()
+    return sum(min(lo[row[p], 2] for p in body) <= floor + tol for body in bodies(boxes, tol)) >= 2
+
+
 def object_groups(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE,
                   scene_height: float | None = None) -> list[list[int]]:
     """The parts of each physical object (sorted lists, ordered by smallest id) from their boxes."""
@@ -208,7 +221,7 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
     hung from another piece of its own object, or, heading its object's only piece, with its
     object re-rooted at its largest other part (the joint is the part's motion against the rest of
     its object: a globe's stand wired with its hinge to the table turns against its globe)."""
-    if len(structure.roots()) < 2:
+    if len(structure.roots()) < 2 and not stands_apart({p: boxes[p] for p in structure.nodes if p in boxes}, tol):
         return structure
     label = object_of_parts(structure, boxes, tol)
     nodes = dict(structure.nodes)

@@ -13,7 +13,7 @@ import pytest
 from data_pipeline.scenes import make_scene
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.structure import Box, Joint, Material, Node, Structure, parse_structure, to_json, validate
-from jax3dc.structure.scene_grouping import object_groups, regroup, regroup_text
+from jax3dc.structure.scene_grouping import object_groups, regroup, regroup_text, stands_apart
 
 HINGE = Joint("hinge", (0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (0.0, 1.0))
 
@@ -60,10 +60,33 @@ def test_a_rigid_lid_stays_with_its_item_and_a_cut_part_hangs_from_its_own_objec
 
 
 def test_one_tree_is_left_as_written_even_when_the_geometry_shows_several_objects() -> None:
-    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: 1})
-    assert regroup(s, TABLE_SCENE) is s
+    # The table and the kettle on it: one body, nothing else on the floor. A single object looks
+    # the same (a kettle's lid on its body, cushions on a sofa), so one tree stays one tree.
+    boxes = {k: TABLE_SCENE[k] for k in (1, 2, 3, 4, 5)}
+    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4})
+    assert len(object_groups(boxes)) == 2 and not stands_apart(boxes)
+    assert regroup(s, boxes) is s
     text = to_json(s)
-    assert regroup_text(text, TABLE_SCENE) == text
+    assert regroup_text(text, boxes) == text
+
+
+def test_one_tree_over_two_bodies_standing_on_the_floor_is_a_scene() -> None:
+    s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: 5}, {5: HINGE})
+    assert stands_apart(TABLE_SCENE)
+    out = regroup(s, TABLE_SCENE)
+    assert groups(out) == [[1, 2, 3], [4, 5], [6]]
+    assert out.nodes[5] == s.nodes[5]
+
+
+def test_a_single_object_with_a_lifted_lid_or_a_hanging_tray_is_never_split() -> None:
+    # A box on the floor with its lid lifted clear above it, and a desk (top on two legs) with a
+    # tray hanging clear under its top: separate bodies, but only one of them stands on the floor.
+    lidded = {1: box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.3)), 2: box((-0.5, -0.5, 0.4), (0.5, 0.5, 0.45))}
+    desk = {**{k: TABLE_SCENE[k] for k in (1, 2, 3)}, 4: box((-0.3, -0.2, -0.1), (0.0, 0.15, -0.03))}
+    for boxes, parents in ((lidded, {1: None, 2: 1}), (desk, {1: None, 2: 1, 3: 1, 4: 1})):
+        s = structure(parents)
+        assert len(object_groups(boxes)) == 2 and not stands_apart(boxes)
+        assert regroup(s, boxes) is s
 
 
 def test_one_part_and_no_boxes() -> None:
