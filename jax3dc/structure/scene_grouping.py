@@ -22,11 +22,14 @@ objects). This step reads the object partition from the legend boxes and fixes t
    model's edges are kept, and a piece left without its parent hangs, with the joint it had, from
    the nearest part of its object outside its own subtree.
 
-The step runs only on a scene: where the model wrote several trees, or where the legend shows two
+The step runs only on a scene: where the model wrote several trees; where the legend shows two
 bodies standing apart on the floor (pieces of furniture side by side; no single object of the
-procedural build or the real sets has two). A single object's parts need not touch (a lifted lid, a
-desk's keyboard tray, knobs on a stove top), so geometry alone would split it, and one tree over a
-legend without two such bodies is left exactly as written. Parts the legend gives no box
+procedural build or the real sets has two); or where the model wrote a ``support`` relation (SPEC
+§2: an object resting on another, written in scenes only) between parts the boxes place in two
+objects. A single object's parts need not touch (a lifted lid, a desk's keyboard tray, knobs on a
+stove top), and an item on a table has the boxes of a kettle's lid on its body or a tap on a
+kitchen counter, so one tree without any of these cues is left exactly as written. Parts the legend
+gives no box
 follow their parent. A valid structure stays valid: ids, materials and relations are kept, and
 every cut leaves a forest.
 """
@@ -214,6 +217,20 @@ def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float =
     return {pid: of(pid) for pid in sorted(structure.nodes)}
 
 
+def _reads_as_scene(structure: Structure, boxes: Mapping[int, Box], tol: float) -> bool:
+    """Whether ``structure`` over ``boxes`` is a scene (the module docstring's three cues)."""
+    if len(structure.roots()) >= 2:
+        return True
+    boxed = {p: boxes[p] for p in structure.nodes if p in boxes}
+    if stands_apart(boxed, tol):
+        return True
+    supports = [(r.a, r.b) for r in structure.relations if r.type == "support" and r.a in boxed and r.b in boxed]
+    if not supports:
+        return False
+    label = {p: k for k, group in enumerate(object_groups(boxed, tol)) for p in group}
+    return any(label[a] != label[b] for a, b in supports)
+
+
 def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> Structure:
     """``structure`` with one tree per object of ``object_of_parts`` (see the module docstring).
 
@@ -221,7 +238,7 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
     hung from another piece of its own object, or, heading its object's only piece, with its
     object re-rooted at its largest other part (the joint is the part's motion against the rest of
     its object: a globe's stand wired with its hinge to the table turns against its globe)."""
-    if len(structure.roots()) < 2 and not stands_apart({p: boxes[p] for p in structure.nodes if p in boxes}, tol):
+    if not _reads_as_scene(structure, boxes, tol):
         return structure
     label = object_of_parts(structure, boxes, tol)
     nodes = dict(structure.nodes)
