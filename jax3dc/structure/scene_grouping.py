@@ -237,7 +237,10 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
     A part cut from a parent in another object keeps the joint the model wrote on it where it can:
     hung from another piece of its own object, or, heading its object's only piece, with its
     object re-rooted at its largest other part (the joint is the part's motion against the rest of
-    its object: a globe's stand wired with its hinge to the table turns against its globe)."""
+    its object: a globe's stand wired with its hinge to the table turns against its globe). The
+    largest part of its object keeps no such joint: it is the object's canonical root, and
+    re-rooting under a smaller part would take that part's own joint (a wardrobe wired with a slide
+    to a desk loses the slide of its drawer)."""
     if not _reads_as_scene(structure, boxes, tol):
         return structure
     label = object_of_parts(structure, boxes, tol)
@@ -273,7 +276,7 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
             placed.update(members[r])
         joint = structure.nodes[main].joint if loose[main] else None
         others = sorted(p for p in placed - {main} if p in boxes)  # a part without a box is never a root
-        if joint is not None and others:
+        if joint is not None and others and volume(max(others, key=volume)) > volume(main):
             reroot(nodes, max(others, key=volume))
             nodes[main] = replace(nodes[main], joint=joint)
     return replace(structure, nodes=nodes)

@@ -247,3 +247,15 @@ def test_one_tree_with_a_support_relation_between_two_objects_is_a_scene() -> No
     assert groups(regroup(rests, boxes)) == [[1, 2, 3], [4, 5]]
     inside = replace(s, relations=(Relation("support", 2, 1),))
     assert regroup(inside, boxes) is inside
+
+
+def test_a_cut_joint_on_an_objects_largest_part_never_takes_the_joint_of_another_part() -> None:
+    # A cabinet 7 beside the table, wired with a slide to the table top, and its drawer 8 with its
+    # own slide on the cabinet: the cabinet heads its object, the drawer keeps its slide.
+    drawer = Joint("slide", (0.0, 1.0, 0.0), (0.5, -0.2, -0.3), (-0.1, 0.0))
+    boxes = {**{k: TABLE_SCENE[k] for k in (1, 2, 3)}, 7: box((0.3, -0.2, -0.5), (0.7, 0.2, 0.0)),
+             8: box((0.35, -0.22, -0.4), (0.65, -0.2, -0.2))}
+    s = structure({1: None, 2: 1, 3: 1, 7: 1, 8: 7}, {7: SLIDE, 8: drawer})
+    out = regroup(s, boxes)
+    assert groups(out) == [[1, 2, 3], [7, 8]]
+    assert out.nodes[7] == Node(None, 0) and out.nodes[8] == s.nodes[8]
