@@ -237,10 +237,9 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
     A part cut from a parent in another object keeps the joint the model wrote on it where it can:
     hung from another piece of its own object, or, heading its object's only piece, with its
     object re-rooted at its largest other part (the joint is the part's motion against the rest of
-    its object: a globe's stand wired with its hinge to the table turns against its globe). The
-    largest part of its object keeps no such joint: it is the object's canonical root, and
-    re-rooting under a smaller part would take that part's own joint (a wardrobe wired with a slide
-    to a desk loses the slide of its drawer)."""
+    its object: a globe's stand wired with its hinge to the table turns against its globe), unless
+    that re-rooting would take the joint the model wrote on the part below it (a wardrobe wired with
+    a slide to a desk would take its drawer's slide): then the cut joint is dropped."""
     if not _reads_as_scene(structure, boxes, tol):
         return structure
     label = object_of_parts(structure, boxes, tol)
@@ -276,9 +275,14 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
             placed.update(members[r])
         joint = structure.nodes[main].joint if loose[main] else None
         others = sorted(p for p in placed - {main} if p in boxes)  # a part without a box is never a root
-        if joint is not None and others and volume(max(others, key=volume)) > volume(main):
-            reroot(nodes, max(others, key=volume))
-            nodes[main] = replace(nodes[main], joint=joint)
+        if joint is not None and others:
+            target = max(others, key=volume)
+            below = target  # the part under ``main`` on the way to ``target``: its joint would go
+            while nodes[below].parent != main:
+                below = nodes[below].parent
+            if nodes[below].joint is None:
+                reroot(nodes, target)
+                nodes[main] = replace(nodes[main], joint=joint)
     return replace(structure, nodes=nodes)
 
 
