@@ -14,10 +14,11 @@ objects). This step reads the object partition from the legend boxes and fixes t
    the lower side's, and the lower side at least ``HOST_SHARE`` of the scene's height), separates
    items from the furniture they stand on. An item is not cut again (its lid rests on its body);
    what is below may be.
-3. **The model's joints**: a joint the model wrote from a part that hangs under its parent, in
-   another body (footprints overlapping, at most ``JOINT_REACH`` below), keeps the two bodies in one
-   object (a keyboard tray under a desk top). A joint between pieces side by side does not: a
-   cabinet standing 3 cm beside a desk is another object however the model wired it.
+3. **The model's joints**: a joint the model wrote between parts of two bodies keeps them in one
+   object where the two are stacked (footprints overlapping, at most ``JOINT_REACH`` apart
+   vertically: a keyboard tray under a desk top, a lid lifted off its box) or side by side at most
+   ``SIDE_REACH`` apart (a door on its carcass). Farther side by side it does not: a cabinet standing
+   3 cm beside a desk is another object however the model wired it.
 4. **Regrouping**: a parent edge between parts of different objects is cut; within one object the
    model's edges are kept, and a piece left without its parent hangs, with the joint it had, from
    the nearest part of its object outside its own subtree.
@@ -65,8 +66,13 @@ HOST_SHARE = 0.3
 stand, or a lid on a kettle, both on the floor beside a table, are parts of one item."""
 
 JOINT_REACH = 0.06
-"""nu: a joint the model writes from a part hanging at most this far under its parent keeps them in
-one object (a tray hangs under a desk top with a small clearance); farther, it is an error."""
+"""nu: a joint the model writes between two stacked parts at most this far apart keeps them in one
+object (a tray hangs under a desk top, a lid lifts off its box); farther, it is an error."""
+
+SIDE_REACH = 0.01
+"""nu: the same for two parts side by side. Real objects' doors and lids beside their bodies are at
+most 0.01 apart; different objects side by side in the scene builds are 0.0135 or more apart, and
+the joints the release model wrote between furniture side by side spanned 0.025 to 0.044."""
 
 
 def _corners(boxes: Mapping[int, Box], ids: Iterable[int]) -> tuple[list[int], np.ndarray, np.ndarray]:
@@ -184,17 +190,17 @@ def _gap(a: Box, b: Box) -> float:
     return float(_axis_gaps(a, b).max())
 
 
-def _hangs_under(child: Box, parent: Box, tol: float) -> bool:
-    """Whether ``child`` hangs under ``parent`` (step 3): footprints overlapping, its top at most
-    ``JOINT_REACH`` below the parent's bottom. In the scene builds every joint between two bodies
-    of one object is such (keyboard trays); the ones models write between objects stand side by side."""
+def _held_by_joint(child: Box, parent: Box, tol: float) -> bool:
+    """Whether a joint between the two boxes keeps their bodies in one object (step 3): stacked
+    within ``JOINT_REACH`` (every such joint of the scene builds: keyboard trays) or side by side
+    within ``SIDE_REACH``."""
     gaps = _axis_gaps(child, parent)
-    return bool((gaps[:2] <= tol).all() and gaps[2] <= JOINT_REACH and child.centroid[2] < parent.centroid[2])
+    return bool(((gaps[:2] <= tol).all() and gaps[2] <= JOINT_REACH) or gaps.max() <= SIDE_REACH)
 
 
 def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> dict[int, int]:
     """Part id -> object label: geometric objects (``object_groups``) joined where the model put a
-    joint on a part hanging under its parent in another body (step 3). A part without a box takes
+    joint between two bodies that it holds together (step 3). A part without a box takes
     its parent's label (a root without a box is its own object)."""
     boxed = {p: boxes[p] for p in structure.nodes if p in boxes}
     label = {p: k for k, group in enumerate(object_groups(boxed, tol)) for p in group}
@@ -202,7 +208,7 @@ def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float =
     for child, node in structure.nodes.items():
         p = node.parent
         if (node.joint is not None and child in boxed and p in boxed and body[child] != body[p]
-                and _hangs_under(boxed[child], boxed[p], tol)):
+                and _held_by_joint(boxed[child], boxed[p], tol)):
             old, new = label[child], label[p]
             if old != new:
                 label = {q: new if k == old else k for q, k in label.items()}

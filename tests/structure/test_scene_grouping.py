@@ -285,3 +285,14 @@ def test_one_tree_over_a_scene_with_a_part_missing_from_the_legend() -> None:
     out = regroup(s, boxes)
     assert groups(out) == [[1, 2, 3], [4, 5], [6]]  # the lid follows its parent, the bucket is cut
     assert validate(json.loads(to_json(out)), part_ids=range(1, 7)) == []
+
+
+def test_a_joint_keeps_a_lifted_lid_and_a_door_with_clearance_on_a_single_object_written_as_two_trees() -> None:
+    # A chest 1 with its lid 2 lifted 0.03 above it and its door 3 hanging 0.008 in front of it,
+    # both on hinges; the model wrote the handle 4 (touching the door) as a second tree.
+    boxes = {1: box((-0.5, -0.3, -0.5), (0.5, 0.3, 0.3)), 2: box((-0.5, -0.3, 0.33), (0.5, 0.3, 0.36)),
+             3: box((-0.4, -0.33, -0.4), (0.4, -0.308, 0.2)), 4: box((0.3, -0.36, -0.1), (0.35, -0.33, 0.0))}
+    s = structure({1: None, 2: 1, 3: 1, 4: None}, {2: HINGE, 3: HINGE})
+    out = regroup(s, boxes)
+    assert groups(out) == [[1, 2, 3, 4]]
+    assert out.nodes[2] == s.nodes[2] and out.nodes[3] == s.nodes[3] and out.nodes[4] == Node(3, 0)
