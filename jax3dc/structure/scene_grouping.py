@@ -9,10 +9,10 @@ objects). This step reads the object partition from the legend boxes and fixes t
    connected set is one body.
 2. **Supports**: inside a body, the lowest horizontal plane with every part wholly above or wholly
    below it (a part within ``tol`` of both sides is above when its centre is: an item's base can be
-   thinner than the legend's rounding), where each upper piece stands inside the top face of one lower part (footprint centre
-   inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at least ``HEIGHT_SHARE`` of
-   the lower side's, and the lower side at least ``HOST_SHARE`` of the scene's height), separates
-   items from the furniture they stand on. An item is not cut again (its lid rests on its body);
+   thinner than the legend's rounding), where each upper piece stands inside the top face of one
+   lower part (footprint centre inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at
+   least ``HEIGHT_SHARE`` of the lower side's, and the lower side at least ``HOST_SHARE`` of the
+   scene's height), separates items from the furniture they stand on. An item is not cut again (its lid rests on its body);
    what is below may be.
 3. **The model's joints**: a joint the model wrote between parts of two bodies keeps them in one
    object where the two are stacked (footprints overlapping, at most ``JOINT_REACH`` apart
@@ -29,10 +29,9 @@ procedural build or the real sets has two); or where the model wrote a ``support
 §2: an object resting on another, written in scenes only) between parts the boxes place in two
 objects. A single object's parts need not touch (a lifted lid, a desk's keyboard tray, knobs on a
 stove top), and an item on a table has the boxes of a kettle's lid on its body or a tap on a
-kitchen counter, so one tree without any of these cues is left exactly as written. Parts the legend
-gives no box
-follow their parent. A valid structure stays valid: ids, materials and relations are kept, and
-every cut leaves a forest.
+kitchen counter, so one tree without any of these cues is left exactly as written. Parts the
+legend gives no box follow their parent. A valid structure stays valid: ids, materials and
+relations are kept, and every cut leaves a forest.
 """
 
 from __future__ import annotations
