@@ -12,8 +12,8 @@ objects). This step reads the object partition from the legend boxes and fixes t
    thinner than the legend's rounding), where each upper piece stands inside the top face of one
    lower part (footprint centre inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at
    least ``HEIGHT_SHARE`` of the lower side's, and the lower side at least ``HOST_SHARE`` of the
-   scene's height), separates items from the furniture they stand on. An item is not cut again (its lid rests on its body);
-   what is below may be.
+   scene's height), separates items from the furniture they stand on. An item is not cut again
+   (its lid rests on its body); what is below may be.
 3. **The model's joints**: a joint the model wrote between parts of two bodies keeps them in one
    object where the two are stacked (footprints overlapping, at most ``JOINT_REACH`` apart
    vertically: a keyboard tray under a desk top, a lid lifted off its box) or side by side at most

@@ -218,7 +218,8 @@ def test_an_item_whose_base_is_thinner_than_the_contact_tolerance_is_cut_at_its_
     # A stapler (base 4, arm 5, top 6) on the table top 1, its base 0.004 nu thick: the cut is at
     # the table top, not at the stapler's own base (which would leave the base on the table).
     boxes = {**{k: TABLE_SCENE[k] for k in (1, 2, 3)}, 4: box((-0.30, -0.02, 0.050), (-0.286, 0.02, 0.054)),
-             5: box((-0.298, 0.014, 0.053), (-0.288, 0.02, 0.056)), 6: box((-0.299, -0.02, 0.057), (-0.287, 0.02, 0.065))}
+             5: box((-0.298, 0.014, 0.053), (-0.288, 0.02, 0.056)),
+             6: box((-0.299, -0.02, 0.057), (-0.287, 0.02, 0.065))}
     assert object_groups(boxes) == [[1, 2, 3], [4, 5, 6]]
     s = structure({1: None, 2: 1, 3: 1, 4: 1, 5: 4, 6: None})
     assert groups(regroup(s, boxes)) == [[1, 2, 3], [4, 5, 6]]
