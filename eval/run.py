@@ -233,8 +233,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      "(jax3dc.grounding; off by default: on the release-3 benchmark it did not raise held-out real success, "
                      "see docs/runs/grounding_20261128)")
     run.add_argument("--scene-grouping", action=argparse.BooleanOptionalAction, default=True,
-                     help="where the model wrote several trees (a scene), cut each parent edge the legend boxes show "
-                     "to join two separate objects, and hang a piece left without its parent from its own object "
+                     help="in a scene (the model wrote several trees, the legend shows two bodies on the floor, or "
+                     "the model wrote a support relation between two objects), cut each parent edge the legend boxes "
+                     "show to join two separate objects, and hang a piece left without its parent from its own object "
                      "(jax3dc.structure.scene_grouping; default: on)")
     run.add_argument("--temperature", type=positive_float, default=0.8, help="sampling temperature of candidates 2..K (default 0.8)")
     run.add_argument("--top-p", type=positive_float, default=0.95, help="nucleus of candidates 2..K (default 0.95)")

@@ -89,7 +89,8 @@ class DecodeOptions:
     top_p: float = 0.95
     seed: int = 0
     # Structures: a parent edge the legend boxes show to join two separate objects of a scene is cut
-    # (jax3dc.structure.scene_grouping); only where the model wrote several trees.
+    # (jax3dc.structure.scene_grouping); only where the output reads as a scene (several trees, two
+    # bodies on the floor, or a support relation between two objects).
     scene_grouping: bool = True
     # The parameters task's grammar is built from the factories' schemas (category -> Schema): the
     # caller passes them (jax3dc.factories.registry.SCHEMAS).

@@ -8,22 +8,30 @@ objects). This step reads the object partition from the legend boxes and fixes t
 1. **Bodies**: parts whose boxes touch (gap at most ``tol`` on every axis) are joined; each
    connected set is one body.
 2. **Supports**: inside a body, the lowest horizontal plane with every part wholly above or wholly
-   below it, where each upper piece stands inside the top face of one lower part (footprint centre
-   inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at least ``HEIGHT_SHARE`` of
-   the lower side's, and the lower side at least ``HOST_SHARE`` of the scene's height), separates
-   items from the furniture they stand on. An item is not cut again (its lid rests on its body);
-   what is below may be.
-3. **The model's joints**: a joint the model wrote between parts of two bodies at most
-   ``JOINT_REACH`` apart keeps them in one object (a tray hanging under a desk top).
+   below it (a part within ``tol`` of both sides is above when its centre is: an item's base can be
+   thinner than the legend's rounding), where each upper piece stands inside the top face of one
+   lower part (footprint centre inside, footprint at most ``FOOTPRINT_SHARE`` of the face, height at
+   least ``HEIGHT_SHARE`` of the lower side's, and the lower side at least ``HOST_SHARE`` of the
+   scene's height), separates items from the furniture they stand on. An item is not cut again
+   (its lid rests on its body); what is below may be.
+3. **The model's joints**: a joint the model wrote between parts of two bodies keeps them in one
+   object where the two are stacked (footprints overlapping, at most ``JOINT_REACH`` apart
+   vertically: a keyboard tray under a desk top, a lid lifted off its box) or side by side at most
+   ``SIDE_REACH`` apart (a door on its carcass). Farther side by side it does not: a cabinet standing
+   3 cm beside a desk is another object however the model wired it.
 4. **Regrouping**: a parent edge between parts of different objects is cut; within one object the
    model's edges are kept, and a piece left without its parent hangs, with the joint it had, from
    the nearest part of its object outside its own subtree.
 
-The step runs only where the model wrote several trees (it read a scene): a single object's parts
-need not touch (a lifted lid, a desk's keyboard tray, knobs on a stove top), so geometry alone would
-split it, and a structure of one tree is left exactly as written. Parts the legend gives no box
-follow their parent. A valid structure stays valid: ids, materials and relations are kept, and
-every cut leaves a forest.
+The step runs only on a scene: where the model wrote several trees; where the legend shows two
+bodies standing apart on the floor (pieces of furniture side by side; no single object of the
+procedural build or the real sets has two); or where the model wrote a ``support`` relation (SPEC
+§2: an object resting on another, written in scenes only) between parts the boxes place in two
+objects. A single object's parts need not touch (a lifted lid, a desk's keyboard tray, knobs on a
+stove top), and an item on a table has the boxes of a kettle's lid on its body or a tap on a
+kitchen counter, so one tree without any of these cues is left exactly as written. Parts the
+legend gives no box follow their parent. A valid structure stays valid: ids, materials and
+relations are kept, and every cut leaves a forest.
 """
 
 from __future__ import annotations
@@ -57,8 +65,13 @@ HOST_SHARE = 0.3
 stand, or a lid on a kettle, both on the floor beside a table, are parts of one item."""
 
 JOINT_REACH = 0.06
-"""nu: a joint the model writes between two parts at most this far apart keeps them in one object
-(a drawer or tray hangs from its parent with a small clearance); farther, it is an error."""
+"""nu: a joint the model writes between two stacked parts at most this far apart keeps them in one
+object (a tray hangs under a desk top, a lid lifts off its box); farther, it is an error."""
+
+SIDE_REACH = 0.01
+"""nu: the same for two parts side by side. Real objects' doors and lids beside their bodies are at
+most 0.01 apart; different objects side by side in the scene builds are 0.0135 or more apart, and
+the joints the release model wrote between furniture side by side spanned 0.025 to 0.044."""
 
 
 def _corners(boxes: Mapping[int, Box], ids: Iterable[int]) -> tuple[list[int], np.ndarray, np.ndarray]:
@@ -98,7 +111,7 @@ def _support_split(ids: list[int], lo: np.ndarray, hi: np.ndarray, tol: float,
     row = {pid: k for k, pid in enumerate(ids)}
     for z in sorted(set(np.round(hi[:, 2], 6))):
         above, below = lo[:, 2] >= z - tol, hi[:, 2] <= z + tol
-        upper = above & ~below
+        upper = above & ((lo[:, 2] + hi[:, 2]) / 2 > z)  # a base thinner than tol is still above
         lower = ~upper
         if not (above | below).all() or not upper.any() or not lower.any():
             continue
@@ -132,6 +145,17 @@ def bodies(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> list[lis
     return _components(ids, _touching(lo, hi, tol))
 
 
+def stands_apart(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> bool:
+    """Whether at least two bodies stand on the floor (their lowest points within ``tol`` of the
+    lowest of all boxes): the legend of a scene, read before the model's trees (module docstring)."""
+    if not boxes:
+        return False
+    ids, lo, _ = _corners(boxes, boxes)
+    row = {pid: k for k, pid in enumerate(ids)}
+    floor = lo[:, 2].min()
+    return sum(min(lo[row[p], 2] for p in body) <= floor + tol for body in bodies(boxes, tol)) >= 2
+
+
 def object_groups(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE,
                   scene_height: float | None = None) -> list[list[int]]:
     """The parts of each physical object (sorted lists, ordered by smallest id) from their boxes."""
@@ -153,24 +177,37 @@ def object_groups(boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE,
     return sorted(done, key=lambda g: g[0])
 
 
-def _gap(a: Box, b: Box) -> float:
-    """Largest per-axis gap between two boxes (negative: they overlap on every axis)."""
+def _axis_gaps(a: Box, b: Box) -> np.ndarray:
+    """Gap between two boxes along each axis (negative: their spans overlap on that axis)."""
     ca, cb = np.asarray(a.centroid), np.asarray(b.centroid)
     half = (np.abs(np.asarray(a.extent)) + np.abs(np.asarray(b.extent))) / 2
-    return float((np.abs(ca - cb) - half).max())
+    return np.abs(ca - cb) - half
+
+
+def _gap(a: Box, b: Box) -> float:
+    """Largest per-axis gap between two boxes (negative: they overlap on every axis)."""
+    return float(_axis_gaps(a, b).max())
+
+
+def _held_by_joint(child: Box, parent: Box, tol: float) -> bool:
+    """Whether a joint between the two boxes keeps their bodies in one object (step 3): stacked
+    within ``JOINT_REACH`` (every such joint of the scene builds: keyboard trays) or side by side
+    within ``SIDE_REACH``."""
+    gaps = _axis_gaps(child, parent)
+    return bool(((gaps[:2] <= tol).all() and gaps[2] <= JOINT_REACH) or gaps.max() <= SIDE_REACH)
 
 
 def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> dict[int, int]:
     """Part id -> object label: geometric objects (``object_groups``) joined where the model put a
-    joint between parts of two bodies at most ``JOINT_REACH`` apart (step 3). A part without a box
-    takes its parent's label (a root without a box is its own object)."""
+    joint between two bodies that it holds together (step 3). A part without a box takes
+    its parent's label (a root without a box is its own object)."""
     boxed = {p: boxes[p] for p in structure.nodes if p in boxes}
     label = {p: k for k, group in enumerate(object_groups(boxed, tol)) for p in group}
     body = {p: k for k, group in enumerate(bodies(boxed, tol)) for p in group}
     for child, node in structure.nodes.items():
         p = node.parent
         if (node.joint is not None and child in boxed and p in boxed and body[child] != body[p]
-                and _gap(boxed[child], boxed[p]) <= JOINT_REACH):
+                and _held_by_joint(boxed[child], boxed[p], tol)):
             old, new = label[child], label[p]
             if old != new:
                 label = {q: new if k == old else k for q, k in label.items()}
@@ -185,14 +222,30 @@ def object_of_parts(structure: Structure, boxes: Mapping[int, Box], tol: float =
     return {pid: of(pid) for pid in sorted(structure.nodes)}
 
 
+def _reads_as_scene(structure: Structure, boxes: Mapping[int, Box], tol: float) -> bool:
+    """Whether ``structure`` over ``boxes`` is a scene (the module docstring's three cues)."""
+    if len(structure.roots()) >= 2:
+        return True
+    boxed = {p: boxes[p] for p in structure.nodes if p in boxes}
+    if stands_apart(boxed, tol):
+        return True
+    supports = [(r.a, r.b) for r in structure.relations if r.type == "support" and r.a in boxed and r.b in boxed]
+    if not supports:
+        return False
+    label = {p: k for k, group in enumerate(object_groups(boxed, tol)) for p in group}
+    return any(label[a] != label[b] for a, b in supports)
+
+
 def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT_TOLERANCE) -> Structure:
     """``structure`` with one tree per object of ``object_of_parts`` (see the module docstring).
 
     A part cut from a parent in another object keeps the joint the model wrote on it where it can:
     hung from another piece of its own object, or, heading its object's only piece, with its
     object re-rooted at its largest other part (the joint is the part's motion against the rest of
-    its object: a globe's stand wired with its hinge to the table turns against its globe)."""
-    if len(structure.roots()) < 2:
+    its object: a globe's stand wired with its hinge to the table turns against its globe), unless
+    that re-rooting would take the joint the model wrote on the part below it (a wardrobe wired with
+    a slide to a desk would take its drawer's slide): then the cut joint is dropped."""
+    if not _reads_as_scene(structure, boxes, tol):
         return structure
     label = object_of_parts(structure, boxes, tol)
     nodes = dict(structure.nodes)
@@ -228,8 +281,13 @@ def regroup(structure: Structure, boxes: Mapping[int, Box], tol: float = CONTACT
         joint = structure.nodes[main].joint if loose[main] else None
         others = sorted(p for p in placed - {main} if p in boxes)  # a part without a box is never a root
         if joint is not None and others:
-            reroot(nodes, max(others, key=volume))
-            nodes[main] = replace(nodes[main], joint=joint)
+            target = max(others, key=volume)
+            below = target  # the part under ``main`` on the way to ``target``: its joint would go
+            while nodes[below].parent != main:
+                below = nodes[below].parent
+            if nodes[below].joint is None:
+                reroot(nodes, target)
+                nodes[main] = replace(nodes[main], joint=joint)
     return replace(structure, nodes=nodes)
 
 
