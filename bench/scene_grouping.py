@@ -33,8 +33,11 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Iterable
 
+from data_pipeline.samples import derived_rng, split_of
+from data_pipeline.scenes import make_scene
 from data_pipeline.shards import shard_paths
 from eval.records import read_records
+from jax3dc.geometry.parts import part_boxes
 from jax3dc.prompt import legend_boxes
 from jax3dc.structure import Box, Structure
 from jax3dc.structure.scene_grouping import regroup, regroup_text
@@ -53,10 +56,6 @@ def partition(s: Structure) -> list[list[int]]:
 
 def built_scenes(count: int) -> Counter:
     """(split, granularity, outcome) counts over the first ``count`` built scenes (module docstring)."""
-    from data_pipeline.samples import derived_rng, split_of
-    from data_pipeline.scenes import make_scene
-    from jax3dc.geometry.parts import part_boxes
-
     out: Counter = Counter()
     for index in range(count):
         for scene in make_scene(0, index):
