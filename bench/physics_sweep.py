@@ -72,7 +72,7 @@ def _same(a: dict[str, dict], b: dict[str, dict]) -> dict[str, int]:
 
 
 def _plot(runs: list[dict], costs: dict[str, list[dict]], out: Path) -> None:
-    import matplotlib  # lazy: matplotlib (0.34 s with pyplot) for the plots only
+    import matplotlib  # lazy: matplotlib (0.19 s with pyplot) for the plots only
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # lazy: after the Agg backend is chosen
 

@@ -47,7 +47,7 @@ def main() -> None:
     started = time.perf_counter()
 
     apply_gpu_defaults(TRAINING_GPU_FLAGS)  # the trainer's collective-combining defaults (train/cli.py sets them too)
-    # lazy: --help answers before jax and the trainer load (1.6 s; tests/test_bench_options.py runs it)
+    # lazy: --help answers before jax and the trainer load (1.1 s; tests/test_bench_options.py runs it)
     import jax
 
     from train.config import MeshConfig, TrainConfig
