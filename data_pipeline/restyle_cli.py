@@ -54,7 +54,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_restyle_command(args: argparse.Namespace) -> int:
-    # lazy: the renderer's shards and parts (45 ms after `jax3dc --help`, which imports this module)
+    # lazy: the Cycles restyler and its part rebuilder (45 ms after `jax3dc --help`, which imports this module)
     from data_pipeline.cycles import CyclesSettings, restyle_dataset, seconds_per_image
 
     if args.samples < 1 or args.threads < 1 or args.limit < 0:
