@@ -26,9 +26,14 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+from PIL import Image
+
 from data_pipeline.build import BuildConfig, factory_sources, run_build
 from data_pipeline.samples import split_of
+from data_pipeline.shards import read_dataset, write_dataset
 from eval.metrics.tables import format_tables
+from jax3dc.render import png_array, png_bytes
 
 BUILD_OBJECTS = 8500  # the object count of the release's stage-C build (its MODEL_CARD)
 TARGET_GAP = 10.0  # issue 31: Cycles success within 10 points of the in-distribution success
@@ -105,11 +110,6 @@ def main(argv: list[str] | None = None) -> int:
 
 def write_blank_images(source: Path, out: Path) -> None:
     """``source``'s test records with I black (same size), everything else kept, in one shard."""
-    import numpy as np
-
-    from jax3dc.render import png_array, png_bytes
-    from data_pipeline.shards import read_dataset, write_dataset
-
     if (out / "manifest.json").exists():
         return
     records = list(read_dataset(source))
@@ -121,12 +121,6 @@ def write_blank_images(source: Path, out: Path) -> None:
 
 def example_sheet(mujoco: Path, cycles: Path, n: int, path: Path, side: int = 160) -> None:
     """The first ``n`` records side by side: MuJoCo's I above Cycles' I above S."""
-    import numpy as np
-    from PIL import Image
-
-    from jax3dc.render import png_array
-    from data_pipeline.shards import read_dataset
-
     shifted = {r.key: r for r in read_dataset(cycles)}
     columns = []
     for record in read_dataset(mujoco):
@@ -139,8 +133,6 @@ def example_sheet(mujoco: Path, cycles: Path, n: int, path: Path, side: int = 16
 
 
 def _mask_ious(folder: Path) -> list[float]:
-    from data_pipeline.shards import read_dataset
-
     return [float(r.meta["cycles"]["mask_iou"]) for r in read_dataset(folder)]
 
 

@@ -15,15 +15,16 @@ import shutil
 import tempfile
 import time
 
+import jax
+import jax.numpy as jnp
+import orbax.checkpoint as ocp
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--gib", type=int, default=24, help="GiB of device arrays (1 GiB each)")
     ap.add_argument("--json", help="write the rows here")
     a = ap.parse_args()
-    import jax
-    import jax.numpy as jnp
-    import orbax.checkpoint as ocp
 
     tree = {f"a{i}": jnp.full((2**29,), i, jnp.bfloat16) for i in range(a.gib)}
     jax.block_until_ready(tree)

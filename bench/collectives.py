@@ -14,6 +14,10 @@ import os
 import sys
 import time
 
+import jax
+import jax.numpy as jnp
+from jax.sharding import NamedSharding, PartitionSpec as P
+
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
@@ -22,9 +26,6 @@ def main() -> None:
     ap.add_argument("--mib", type=int, default=256, help="size of the full (gathered) buffer")
     ap.add_argument("--iters", type=int, default=10)
     a = ap.parse_args()
-    import jax
-    import jax.numpy as jnp
-    from jax.sharding import NamedSharding, PartitionSpec as P
 
     n = jax.device_count()
     mesh = jax.make_mesh((n,), ("fsdp",), axis_types=(jax.sharding.AxisType.Explicit,))

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from bench.options import add_json_lines, add_preset, append_json_lines  # noqa: E402
+from bench.profile_summary import summarise  # noqa: E402
 from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults  # noqa: E402
 
 apply_gpu_defaults(GENERATION_GPU_FLAGS)  # what `jax3dc predict` and `eval` decode with
@@ -120,7 +121,6 @@ def run_batch(model, preset: Preset, batch: int, generation: GenerationConfig, p
     generated = int(lengths.sum())
     peak = peak_bytes()
     if profile:  # a third, traced run: kernel time per kind and launch counts
-        from bench.profile_summary import summarise
 
         with jax.profiler.trace(profile, create_perfetto_trace=True):
             once()

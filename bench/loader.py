@@ -18,20 +18,19 @@ import tempfile
 import time
 from pathlib import Path
 
+from data_pipeline.build import BuildConfig, factory_sources, run_build
+from data_pipeline.loader import LoaderConfig, ShardLoader
+from jax3dc.model.config import Qwen3VLConfig
+from jax3dc.processing.processor import ImageProcessorConfig
+from jax3dc.processing.tokenizer import load_tokenizer
+
 
 def build_data(folder: Path, objects: int, workers: int) -> None:
-    from data_pipeline.build import BuildConfig, factory_sources, run_build
-
     run_build(folder, factory_sources(objects, 0), BuildConfig(views=2, seed=0, size=448, objects_per_shard=4),
               workers, progress=False)
 
 
 def measure(data: str, workers: int, batches: int, seq_len: int, rows: int, pack: int, pixel_dtype: str) -> dict:
-    from data_pipeline.loader import LoaderConfig, ShardLoader
-    from jax3dc.model.config import Qwen3VLConfig
-    from jax3dc.processing.processor import ImageProcessorConfig
-    from jax3dc.processing.tokenizer import load_tokenizer
-
     cfg = LoaderConfig(sources=(data,), seq_len=seq_len, rows=rows, pack=pack, image_size=448, workers=workers, pixel_dtype=pixel_dtype,
                        worker_buffer=2)
     loader = ShardLoader.create(cfg, Qwen3VLConfig.qwen3_vl_4b(), load_tokenizer(), ImageProcessorConfig.qwen3_vl())

@@ -18,10 +18,19 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
+
+from jax3dc.factories import generate_object  # noqa: E402
+from jax3dc.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances  # noqa: E402
+from jax3dc.physics.sim_model import SimOptions, build_sim_model  # noqa: E402
+from jax3dc.physics.tolerances import PENETRATION_TOL_NU  # noqa: E402
 
 
 def main() -> None:
@@ -36,13 +45,9 @@ def main() -> None:
         args.objects, args.states = "laptop:0", 256
     warnings.filterwarnings("ignore")
 
+    # lazy: the C pool's spawned workers re-import this module (their start-up is printed); jax costs each 0.34 s
     import jax
     import jax.numpy as jnp
-
-    from jax3dc.factories import generate_object
-    from jax3dc.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
-    from jax3dc.physics.sim_model import SimOptions, build_sim_model
-    from jax3dc.physics.tolerances import PENETRATION_TOL_NU
 
     threads = os.cpu_count() or 1
     print(f"devices: {jax.devices()} | CPU processes for C: {threads}", flush=True)
@@ -79,7 +84,7 @@ def main() -> None:
                  f"(pool start {start_s:.1f} s) | C rollout {threads} threads {roll_rate:,.0f} states/s "
                  f"(verdicts agree with the loop on {roll_agree:.4f})")
         if not args.skip_mjx:
-            from jax3dc.physics.mjx_backend import compile_pair_distances
+            from jax3dc.physics.mjx_backend import compile_pair_distances  # lazy: as jax above (0.07 s more)
             t0 = time.perf_counter()
             fn = compile_pair_distances(m)
             q = jnp.asarray(qpos, dtype=jnp.float32)

@@ -23,9 +23,19 @@ import time
 import warnings
 from pathlib import Path
 
+import jax
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
+
+from jax3dc.factories import generate_object  # noqa: E402
+from jax3dc.physics import cpu_backend  # noqa: E402
+from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs  # noqa: E402
+from jax3dc.physics.mjx_dynamics import mjx_final_qpos  # noqa: E402
+from jax3dc.physics.sim_model import SimOptions, build_sim_model  # noqa: E402
+from jax3dc.physics.states import check_states  # noqa: E402
+from jax3dc.physics.tolerances import (DETACH_TOL_NU, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU,  # noqa: E402
+                                      PENETRATION_TOL_NU, RECONTACT_DEPTH_NU)
 
 
 def main() -> None:
@@ -35,17 +45,6 @@ def main() -> None:
                         help="comma list of category:seed (default %(default)s)")
     args = parser.parse_args()
     warnings.filterwarnings("ignore")
-
-    import jax
-
-    from jax3dc.factories import generate_object
-    from jax3dc.physics import cpu_backend
-    from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
-    from jax3dc.physics.mjx_dynamics import mjx_final_qpos
-    from jax3dc.physics.sim_model import SimOptions, build_sim_model
-    from jax3dc.physics.states import check_states
-    from jax3dc.physics.tolerances import (DETACH_TOL_NU, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU, PENETRATION_TOL_NU,
-                                           RECONTACT_DEPTH_NU)
 
     threads = os.cpu_count() or 1
     print(f"devices: {jax.devices()} | C rollout threads: {threads} | {SETTLE_STEPS} steps per rollout", flush=True)

@@ -32,12 +32,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
 
+from data_pipeline.record import Record  # noqa: E402
+from data_pipeline.shards import write_dataset  # noqa: E402
+from jax3dc.cli import main as jax3dc  # noqa: E402
+from jax3dc.factories import FACTORIES, generate_object  # noqa: E402
+from jax3dc.structure import to_json  # noqa: E402
+
 
 def _record(index: int):
-    from jax3dc.factories import FACTORIES, generate_object
-    from data_pipeline.record import Record
-    from jax3dc.structure import to_json
-
     categories = sorted(FACTORIES)
     category, seed = categories[index % len(categories)], index // len(categories)
     obj = generate_object(category, seed)
@@ -48,8 +50,6 @@ def _record(index: int):
 
 def write_build(directory: Path, objects: int, workers: int = 1) -> None:
     """A one-shard data build of ``objects`` factory objects, one rest-pose record each."""
-    from data_pipeline.shards import write_dataset
-
     if workers > 1:
         with ProcessPoolExecutor(workers) as pool:
             records = list(pool.map(_record, range(objects), chunksize=16))
@@ -72,9 +72,9 @@ def _same(a: dict[str, dict], b: dict[str, dict]) -> dict[str, int]:
 
 
 def _plot(runs: list[dict], costs: dict[str, list[dict]], out: Path) -> None:
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.19 s with pyplot) for the plots only
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: after the Agg backend is chosen
 
     fig, ax = plt.subplots(figsize=(5, 3.2))
     for label in sorted({r["label"] for r in runs}):
@@ -112,7 +112,6 @@ def main() -> None:
     parser.add_argument("--report", type=Path, help="keep runs.jsonl, per-run costs and the plots here")
     args = parser.parse_args()
     warnings.filterwarnings("ignore")
-    from jax3dc.cli import main as jax3dc
 
     sizes = [args.objects] if args.objects else [int(n) for n in args.sizes.split(",")]
     runs_of = [(b, int(w)) for b in args.backends.split(",") for w in args.workers.split(",")]

@@ -120,9 +120,10 @@ def table(entries: list[dict], unit_width: int = 44) -> str:
 
 def plot(entries: list[dict], name: str, out: Path) -> None:
     """Draw one figure's lines (and their baselines) against their dates into a PNG."""
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.31 s with pyplot) for the plots only; the tests read the record without it
 
     matplotlib.use("Agg")
+    # lazy: after the Agg backend is chosen
     import matplotlib.dates as mdates
     import matplotlib.pyplot as plt
 

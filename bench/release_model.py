@@ -34,8 +34,12 @@ import shutil
 import time
 from pathlib import Path
 
+import jax.numpy as jnp
+
 from bench import real_objects
 from jax3dc.cli import main as jax3dc
+from jax3dc.model.params import load_pretrained, save_pretrained
+from train.model_state import PRESETS
 
 COLUMNS = ("parse", "parent_acc", "edge_f1", "presence_f1", "type_acc", "axis_acc", "pos_err", "range_iou",
            "success", "sym_f1", "inst_f1", "fail_type", "fail_axis", "fail_origin", "fail_limit")
@@ -75,10 +79,6 @@ def _evaluate_code(model: Path, data: str, out: Path, limit: int, batch: int, ma
 
 def _package(train_dir: Path, out: Path) -> None:
     """bf16 weights, sharded, plus tokenizer and processor files of the run."""
-    import jax.numpy as jnp
-
-    from jax3dc.model.params import load_pretrained, save_pretrained
-
     hf = train_dir / "hf"
     model, config = load_pretrained(hf, dtype=jnp.float32)
     out.mkdir(parents=True, exist_ok=True)
@@ -142,8 +142,6 @@ def main() -> None:
                  "--views", str(a.views), *(["--augment"] if a.augment else []), "--size", str(a.image_size), "--workers", workers, "--quiet"]
         _call(build + (["--appearance", a.appearance] if a.appearance else []))
         print(f"[release] data: {time.perf_counter() - t:.0f} s", flush=True)
-
-    from train.model_state import PRESETS
 
     init_dir = None if a.init in PRESETS else Path(a.init)
     if a.tokenizer:

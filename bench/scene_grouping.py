@@ -36,8 +36,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterable
 
+from data_pipeline.samples import derived_rng, split_of
+from data_pipeline.scenes import make_scene
 from data_pipeline.shards import shard_paths
 from eval.records import read_records
+from jax3dc.geometry.parts import part_boxes
 from jax3dc.prompt import legend_boxes
 from jax3dc.errors import StructureError
 from jax3dc.structure import Box, Structure, parse_structure
@@ -58,10 +61,6 @@ def partition(s: Structure) -> list[list[int]]:
 def built_scenes(count: int, seed: int = 0) -> Counter:
     """(split, granularity, outcome) counts over the first ``count`` built scenes of a build with
     ``seed`` (module docstring)."""
-    from data_pipeline.samples import derived_rng, split_of
-    from data_pipeline.scenes import make_scene
-    from jax3dc.geometry.parts import part_boxes
-
     out: Counter = Counter()
     for index in range(count):
         for scene in make_scene(seed, index):

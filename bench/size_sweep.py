@@ -17,6 +17,8 @@ import json
 import time
 from pathlib import Path
 
+from safetensors import safe_open
+
 from jax3dc.cli import main as jax3dc
 
 RELEASE_TOKENIZER = Path(__file__).resolve().parents[1] / "jax3dc" / "release"
@@ -29,8 +31,6 @@ def _call(argv: list[str]) -> None:
 
 
 def _params(hf: Path) -> int:
-    from safetensors import safe_open
-
     total = 0
     for f in sorted(hf.glob("*.safetensors")):
         with safe_open(str(f), "numpy") as st:
@@ -64,9 +64,10 @@ def run_point(preset: str, steps: int, data: str, out: Path, eval_records: int, 
 
 
 def plot(points: list[dict], path: Path) -> None:
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.20 s with pyplot) for the plot only
 
     matplotlib.use("Agg")
+    # lazy: after the Agg backend is chosen
     import matplotlib.pyplot as plt
     from matplotlib import ticker
 

@@ -33,6 +33,9 @@ import time
 from pathlib import Path
 
 from bench.release_model import _call, _last_step, _package, _sets
+from eval.parameters_run import table
+from jax3dc.constrained.parameters import longest_text
+from jax3dc.factories.registry import SCHEMAS
 
 SHIPPED_BUDGET_BYTES = 24 * 2**20  # SPEC §7: all shipped weights together
 
@@ -58,9 +61,6 @@ def _eval_structure(model: Path, data: Path, out: Path, limit: int, batch: int) 
 
 
 def main() -> None:
-    from jax3dc.factories.registry import SCHEMAS
-    from jax3dc.constrained.parameters import longest_text
-
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/stage1")
     p.add_argument("--budget-min", type=float, default=9.3, help="stop this call before this many minutes")
@@ -138,7 +138,6 @@ def main() -> None:
                "last_train": train_rows[-1] if train_rows else None, "results": results}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     shutil.copy2(out / "summary.json", package / "stage1_summary.json")
-    from eval.parameters_run import table
 
     print("\n## parameters task (procedural test)\n" + table("stage1", results["parameters"]), flush=True)
     if "structure" in results:

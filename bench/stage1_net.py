@@ -28,15 +28,19 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image
+from flax import nnx
 
 from bench.release_model import _call
+from data_pipeline.shards import read_dataset
+from eval.metrics.parameters import score_parameters, summarise
+from eval.parameters_run import table
+from jax3dc.factories.registry import SCHEMAS, run_parameters
+from jax3dc.stage1_net import OutputLayout, Stage1Net, Stage1NetConfig, load_network, network_image, save_network
+from train.stage1_net import TrainConfig, accuracy, targets, train
 
 
 def _load_split_images(folders: list[Path], size: int) -> dict[str, tuple[list[str], list[np.ndarray], list[str]]]:
     """split -> (keys, network images as uint8, parameter texts) of the records that carry parameters."""
-    from data_pipeline.shards import read_dataset
-    from jax3dc.stage1_net import network_image
-
     out: dict[str, tuple[list, list, list]] = defaultdict(lambda: ([], [], []))
     for record in (r for folder in folders for r in read_dataset(folder)):
         if not record.parameters:
@@ -50,14 +54,6 @@ def _load_split_images(folders: list[Path], size: int) -> dict[str, tuple[list[s
 
 
 def main() -> None:
-    from flax import nnx
-
-    from jax3dc.factories.registry import SCHEMAS, run_parameters
-    from eval.metrics.parameters import score_parameters, summarise
-    from eval.parameters_run import table
-    from jax3dc.stage1_net import OutputLayout, Stage1Net, Stage1NetConfig, load_network, save_network
-    from train.stage1_net import TrainConfig, accuracy, targets, train
-
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/stage1_net")
     p.add_argument("--data", nargs="+", default=[], help="built datasets to use instead of building OUT/data")

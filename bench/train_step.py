@@ -19,6 +19,9 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from bench.options import add_batch, add_image, add_json_lines, add_preset, add_seq, append_json_lines, bench_parser  # noqa: E402
+from bench.profile_summary import summarise  # noqa: E402
+from jax3dc.compilation import CompileClock  # noqa: E402
+from jax3dc.xla_flags import TRAINING_GPU_FLAGS, apply_gpu_defaults  # noqa: E402
 
 os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
 REMAT_NAMES = ("none", "full", "minimal", "qkv")  # jax3dc/model/layer_stack.py (not imported: jax loads after the flags)
@@ -42,9 +45,9 @@ def main() -> None:
     ap.add_argument("--profile", help="after timing, trace 2 steps into this directory and summarise it")
     a = ap.parse_args()
     started = time.perf_counter()
-    from jax3dc.xla_flags import TRAINING_GPU_FLAGS, apply_gpu_defaults
 
     apply_gpu_defaults(TRAINING_GPU_FLAGS)  # the trainer's collective-combining defaults (train/cli.py sets them too)
+    # lazy: --help answers before jax and the trainer load (1.1 s; tests/test_bench_options.py runs it)
     import jax
 
     from train.config import MeshConfig, TrainConfig
@@ -59,7 +62,6 @@ def main() -> None:
     trainer = Trainer(cfg, attention_impl=a.attention)
     loader = make_loader(cfg, trainer.model.config, "train", padding=False)
     batches = [next(loader) for _ in range(2)]
-    from jax3dc.compilation import CompileClock
 
     clock, first = CompileClock(), time.perf_counter()
     for i in range(2):  # compile + warm-up
@@ -83,8 +85,6 @@ def main() -> None:
     peaks = [(d.memory_stats() or {}).get("peak_bytes_in_use", 0) / 2**30 for d in jax.local_devices()]
     print(f"peak_mem_gib per device: max {max(peaks):.1f}")
     if a.profile:
-        from bench.profile_summary import summarise
-
         with jax.profiler.trace(a.profile, create_perfetto_trace=True):
             for i in range(2):
                 m = trainer.train_step(batches[i % 2])

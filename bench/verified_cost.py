@@ -20,6 +20,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
 
+from data_pipeline.record_parts import record_parts  # noqa: E402
+from data_pipeline.shards import read_shard, shard_paths  # noqa: E402
+from jax3dc.structure import boxes_from_dict  # noqa: E402
+from jax3dc.verify.select import parse_candidate  # noqa: E402
+from jax3dc.verify.verdicts import Physics  # noqa: E402
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -28,12 +34,6 @@ def main() -> None:
     parser.add_argument("--records", type=int, default=8, help="records to time (default %(default)s)")
     args = parser.parse_args()
     warnings.filterwarnings("ignore")
-
-    from data_pipeline.shards import read_shard, shard_paths
-    from data_pipeline.record_parts import record_parts
-    from jax3dc.verify.select import parse_candidate
-    from jax3dc.verify.verdicts import Physics
-    from jax3dc.structure import boxes_from_dict
 
     records = []
     for path in shard_paths([args.data], args.split):

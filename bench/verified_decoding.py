@@ -43,6 +43,7 @@ from data_pipeline.record_parts import record_parts  # noqa: E402
 from jax3dc.verify.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, repair  # noqa: E402
 from jax3dc.verify.select import Candidate, Row, _rank, choose, parse_candidate  # noqa: E402
 from eval.run_verify import candidates_of  # noqa: E402
+from jax3dc.release import default_structure_model  # noqa: E402
 from jax3dc.structure import boxes_from_dict, to_json  # noqa: E402
 
 
@@ -142,7 +143,6 @@ def main() -> None:
     p.add_argument("--dtype", default="bfloat16")
     p.add_argument("--skip-throughput", action="store_true")
     a = p.parse_args()
-    from jax3dc.release import default_structure_model
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -23,10 +23,15 @@ from typing import Callable
 from tqdm import tqdm
 
 from data_pipeline.augment import merge_parts, split_part
+from data_pipeline.importers.object_ids import object_ids
+from data_pipeline.importers.source import import_object
 from data_pipeline.mirror import mirrored
 from data_pipeline.samples import SourceObject, derived_rng, factory_source, object_records, split_of
+from data_pipeline.scenes import make_scene
 from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
 from jax3dc.errors import InputFileError, SetupError
+from jax3dc.factories import FACTORIES, object_id
+from jax3dc.render import APPEARANCES
 
 
 @dataclass(frozen=True)
@@ -67,8 +72,6 @@ SPLIT_CHOICES = ("hash", "train", "val", "test")
 def factory_sources(n: int, seed: int) -> list[SourceSpec]:
     """``n`` factory objects cycling through the categories; object k of the build has seed
     ``seed * 1_000_000 + k``, so two builds with different seeds share no object."""
-    from jax3dc.factories import FACTORIES, object_id
-
     categories = list(FACTORIES)
     out = []
     for k in range(n):
@@ -83,8 +86,6 @@ def scene_sources(m: int, seed: int) -> list[SourceSpec]:
 
 def import_sources(paths: list[Path]) -> list[SourceSpec]:
     """One spec per path; ids are unique in the import (see ``importers.object_ids``)."""
-    from data_pipeline.importers.object_ids import object_ids
-
     ids = object_ids(paths)
     return [SourceSpec("import", object_id, path=str(Path(p).resolve())) for p, object_id in zip(paths, ids)]
 
@@ -110,7 +111,6 @@ def plan_shards(sources: list[SourceSpec], objects_per_shard: int, split: str = 
 def load_source(spec: SourceSpec) -> SourceObject:
     if spec.kind == "factory":
         return factory_source(spec.category, spec.seed)
-    from data_pipeline.importers.source import import_object
 
     obj = import_object(Path(spec.path))
     return SourceObject(str(obj.meta.get("category", "imported")), spec.object_id, obj.structure, obj.parts,
@@ -120,8 +120,6 @@ def load_source(spec: SourceSpec) -> SourceObject:
 def load_sources(spec: SourceSpec) -> list[SourceObject]:
     """The objects one spec renders: a scene gives its part- and object-level versions."""
     if spec.kind == "scene":
-        from data_pipeline.scenes import make_scene
-
         return make_scene(spec.seed, int(spec.category))
     return [load_source(spec)]
 
@@ -129,8 +127,6 @@ def load_sources(spec: SourceSpec) -> list[SourceObject]:
 def config_doc(config: BuildConfig) -> dict:
     """The config as a manifest records it: ``appearance`` only when it is not "plain", so a plain
     build writes (and resumes) the manifest of builds made before the option existed."""
-    from jax3dc.render import APPEARANCES
-
     if config.appearance not in APPEARANCES:
         raise ValueError(f"appearance must be one of {', '.join(APPEARANCES)}, not {config.appearance!r}")
     doc = asdict(config)

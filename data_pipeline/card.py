@@ -12,11 +12,13 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 import numpy as np
+from PIL import Image
 from tqdm import tqdm
 
 from jax3dc.render import png_array
 from data_pipeline.shards import load_manifest, read_dataset
 from jax3dc.errors import InputFileError
+from jax3dc.processing.tokenizer import load_tokenizer
 
 CARD_JSON = "card.json"
 CONTACT_SHEET = "contact_sheet.png"
@@ -32,8 +34,6 @@ def _summary(values: list[int]) -> dict:
 def dataset_card(directory: Path, samples: int = 16, thumb: int = 128, progress: bool = True) -> dict:
     """Write ``card.json`` and ``contact_sheet.png`` (I above S for ``samples`` records) into
     ``directory``; returns the statistics."""
-    from jax3dc.processing.tokenizer import load_tokenizer
-
     manifest = load_manifest(directory)
     if manifest is None:
         raise InputFileError(directory, "no manifest.json: not a dataset written by `jax3dc data build`")
@@ -75,8 +75,6 @@ def dataset_card(directory: Path, samples: int = 16, thumb: int = 128, progress:
 
 
 def write_contact_sheet(tiles: list[tuple[np.ndarray, np.ndarray]], thumb: int, path: Path) -> None:
-    from PIL import Image
-
     columns = min(8, len(tiles))
     rows = -(-len(tiles) // columns)
     sheet = Image.new("RGB", (columns * thumb, rows * 2 * thumb), (255, 255, 255))

@@ -8,6 +8,8 @@ from pathlib import Path
 
 from data_pipeline.importers.frames import FRONTS
 from data_pipeline.importers.limits import DEFAULT_MAX_BODIES, DEFAULT_MAX_FACES, ImportLimits
+from data_pipeline.importers.output import write_imported
+from data_pipeline.importers.source import import_object
 from jax3dc.cli_args import positive_int
 
 DESCRIPTION = """\
@@ -62,9 +64,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from data_pipeline.importers.source import import_object
-    from data_pipeline.importers.output import write_imported
-
     limits = ImportLimits(args.max_faces, args.max_bodies, args.allow_outside)
     obj = import_object(args.path, args.metres_per_unit, args.front, progress=not args.quiet, limits=limits)
     if args.category is not None:

@@ -29,6 +29,7 @@ from typing import Callable, Iterable, Mapping
 
 import numpy as np
 import trimesh
+from PIL import Image
 
 from data_pipeline.record import Record
 from data_pipeline.record_parts import record_parts
@@ -37,6 +38,7 @@ from data_pipeline.shards import finished, load_manifest, read_shard, save_manif
 from jax3dc.errors import InputFileError, Jax3dcError, SetupError
 from jax3dc.materials import MATERIALS
 from jax3dc.palette import BACKGROUND_RGB
+from jax3dc.render import png_array, png_bytes
 from jax3dc.structure import Structure, parse_structure
 
 RENDERER = "cycles"
@@ -234,7 +236,6 @@ def restyle_records(records: list[Record], settings: CyclesSettings = CyclesSett
     and build seed only, so restyling the same records twice gives the same looks."""
     if not records:
         return [], []
-    from jax3dc.render import png_array, png_bytes
 
     with tempfile.TemporaryDirectory(prefix="jax3dc_cycles_") as tmp:
         views, looks = [], []
@@ -284,14 +285,10 @@ def restyle_records(records: list[Record], settings: CyclesSettings = CyclesSett
 
 
 def _record_size(record: Record) -> int:
-    from jax3dc.render import png_array
-
     return int(record.meta.get("size") or png_array(record.seg_png).shape[0])
 
 
 def _read_rgba(path: Path) -> np.ndarray:
-    from PIL import Image
-
     with Image.open(path) as image:
         return np.asarray(image.convert("RGBA"))
 

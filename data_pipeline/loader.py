@@ -25,6 +25,7 @@ from typing import Any, Iterator, Mapping, Sequence
 
 import grain
 import numpy as np
+from absl import flags
 
 from data_pipeline.examples import IMAGES_PER_TASK, TASKS, ExampleEncoder, UnusableRecord
 from data_pipeline.packing import Example, RowLayout, pack_row
@@ -249,9 +250,7 @@ def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
     what = f"split {cfg.split!r} ({'+'.join(dict.fromkeys(tasks))} task) of {named} ({sum(lengths)} records)"
     batches = _PackedBatches(examples.to_iter_dataset(), layout, cfg.rows, _full_pass(lengths, cfg.weights), what)
     if cfg.workers > 0:
-        from absl import flags  # grain workers read absl flags; unparsed flags make them fail
-
-        if not flags.FLAGS.is_parsed():
+        if not flags.FLAGS.is_parsed():  # grain workers read absl flags; unparsed flags make them fail
             flags.FLAGS.mark_as_parsed()
         batches = batches.mp_prefetch(grain.MultiprocessingOptions(
             num_workers=cfg.workers, per_worker_buffer_size=cfg.worker_buffer))

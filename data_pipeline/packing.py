@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Sequence
 
+import ml_dtypes
 import numpy as np
 
 from jax3dc.processing.chat import IGNORE_INDEX
@@ -76,8 +77,6 @@ def rope_positions(input_ids: np.ndarray, image_grid_thw: np.ndarray, image_toke
 
 
 def pixel_dtype(name: str) -> np.dtype:
-    import ml_dtypes
-
     return np.dtype(ml_dtypes.bfloat16) if name == "bfloat16" else np.dtype(name)
 
 

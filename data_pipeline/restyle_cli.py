@@ -5,6 +5,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from tqdm import tqdm
+
+from jax3dc.errors import InputFileError, Jax3dcError
+
 RESTYLE_DESCRIPTION = """\
 Re-render the image I of the records of a built dataset with Blender Cycles (a path tracer):
 the same camera and posed parts, but other lights (sun and area lights of random colours, a lit
@@ -50,10 +54,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_restyle_command(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
+    # lazy: the Cycles restyler and its part rebuilder (45 ms after `jax3dc --help`, which imports this module)
     from data_pipeline.cycles import CyclesSettings, restyle_dataset, seconds_per_image
-    from jax3dc.errors import InputFileError, Jax3dcError
 
     if args.samples < 1 or args.threads < 1 or args.limit < 0:
         raise Jax3dcError("--samples and --threads must be >= 1 and --limit >= 0")

@@ -6,6 +6,13 @@ import argparse
 from pathlib import Path
 from typing import Iterable, Iterator
 
+from tqdm import tqdm
+
+from data_pipeline.shards import load_manifest, read_dataset
+from jax3dc.errors import InputFileError
+from jax3dc.processing.bpe import QWEN_ADDED_TOKENS, chat_segments, train_bpe
+from jax3dc.prompt import chat_messages, code_messages, parameters_messages
+
 DESCRIPTION = """\
 Train a byte-level BPE tokenizer on the prompts, target JSON and part programs of built datasets
 (`jax3dc data build` / `import` output), with the same 26 added tokens as Qwen3 (<|im_start|>,
@@ -25,9 +32,6 @@ example:  jax3dc data tokenizer --data data/train --vocab-size 4096 --out tokeni
 
 def record_texts(records: Iterable, split: str) -> Iterator[str]:
     """Chat segments of every record in ``split`` ("all": every record)."""
-    from jax3dc.processing.bpe import chat_segments
-    from jax3dc.prompt import chat_messages, code_messages, parameters_messages
-
     for record in records:
         if split != "all" and record.meta.get("split") != split:
             continue
@@ -58,12 +62,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_tokenizer_command(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from data_pipeline.shards import load_manifest, read_dataset
-    from jax3dc.errors import InputFileError
-    from jax3dc.processing.bpe import QWEN_ADDED_TOKENS, train_bpe
-
     if args.vocab_size < 256 + len(QWEN_ADDED_TOKENS) or args.min_frequency < 1 or args.digits < 1:
         raise SystemExit(f"--vocab-size must be >= {256 + len(QWEN_ADDED_TOKENS)}, --min-frequency and "
                          "--digits >= 1")

@@ -13,9 +13,16 @@ import json
 from pathlib import Path
 from typing import Any, Iterable
 
+from tqdm import tqdm
+
+from eval.baselines import BOX_BASELINES
 from eval.limits import MAX_SCORED_PARTS
+from eval.metrics.cases import build_cases, load_predictions, load_references
+from eval.metrics.score import evaluate
+from eval.metrics.tables import format_tables
 from jax3dc.cli_args import command_group, positive_int
 from jax3dc.errors import InputFileError
+from jax3dc.structure import to_dict
 
 SUBCOMMAND_MODULES: tuple[str, ...] = ("eval.run",)
 
@@ -37,10 +44,6 @@ def write_evaluation(evaluation: Any, out_dir: Path) -> None:
 
 
 def _cases_with_progress(refs: list, preds: dict) -> list:
-    from tqdm import tqdm
-
-    from eval.metrics.cases import build_cases
-
     cases = []
     for ref in tqdm(refs, desc="parsing", unit="obj", leave=False, disable=len(refs) < 500):
         cases.extend(build_cases([ref], preds))
@@ -48,10 +51,6 @@ def _cases_with_progress(refs: list, preds: dict) -> list:
 
 
 def run_metrics(args: argparse.Namespace) -> int:
-    from eval.metrics.cases import load_predictions, load_references
-    from eval.metrics.score import evaluate
-    from eval.metrics.tables import format_tables
-
     refs = load_references(args.ref, args.max_parts)
     preds = load_predictions(args.pred)
     unknown = len(set(preds) - {r.key for r in refs})
@@ -71,13 +70,6 @@ def run_metrics(args: argparse.Namespace) -> int:
 
 
 def run_baselines(args: argparse.Namespace) -> int:
-    from jax3dc.structure import to_dict
-
-    from eval.baselines import BOX_BASELINES
-    from eval.metrics.cases import load_references
-    from eval.metrics.score import evaluate
-    from eval.metrics.tables import format_tables
-
     refs = load_references(args.ref, args.max_parts)
     out = Path(args.out)
     systems = []

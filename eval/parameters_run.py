@@ -13,7 +13,13 @@ import argparse
 import json
 from pathlib import Path
 
+from tqdm import tqdm
+
+from eval.metrics.cases import load_predictions
+from eval.metrics.parameters import score_parameters, summarise
 from jax3dc.errors import InputFileError, Jax3dcError
+from jax3dc.factories.registry import SCHEMAS, run_parameters
+from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
 
 COLUMNS = (("runs", "runs", 1), ("category", "category", 1), ("count_exact", "count exact", 1),
            ("matched_iou", "matched part-box IoU", 1), ("ids", "ids", 1), ("box_iou", "part-box IoU by id", 1),
@@ -29,13 +35,6 @@ def table(name: str, metrics: dict) -> str:
 
 def run_parameters_task(args: argparse.Namespace, records: list, out: Path) -> int:
     """Texts from the checkpoint (or --predictions, or the records' own), run and scored."""
-    from tqdm import tqdm
-
-    from jax3dc.factories.registry import SCHEMAS, run_parameters
-    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
-    from eval.metrics.cases import load_predictions
-    from eval.metrics.parameters import score_parameters, summarise
-
     if args.candidates > 1 or args.repair:
         raise Jax3dcError("--candidates and --repair choose structures; the parameters task takes neither")
     missing = [r.key for r in records if not r.parameters]

@@ -25,6 +25,7 @@ from eval.metrics.part_matching import box_bounds, match_bounds
 from eval.metrics.relabel import relabel
 from eval.metrics.score import Evaluation, evaluate
 from jax3dc.errors import Jax3dcError
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.predict.pipeline import Checkpoints, predict
 from jax3dc.predict.stage1_readers import Reader
@@ -55,8 +56,6 @@ def predict_record(record: Record, reference: Reference, out: Path, read_paramet
                    checkpoints: Checkpoints, max_new_tokens: int = 1024) -> PixelsResult:
     """``predict`` on the record's image alone (no camera, no parts: the default stage 1 reads the
     image through ``read_parameters``), into ``out``, then matched to ``reference``."""
-    from jax3dc.factories.registry import SCHEMAS, run_parameters
-
     started = time.perf_counter()
     try:
         result = predict(Image.open(io.BytesIO(record.image_png)), None, default_structure_model(), out=out, read_parameters=read_parameters,

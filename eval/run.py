@@ -23,16 +23,25 @@ import json
 import os
 from pathlib import Path
 
+from tqdm import tqdm
+
+from data_pipeline.shards import shard_paths
+from eval.metrics.cases import build_cases, load_predictions
+from eval.metrics.programs import score_program, summarise
+from eval.metrics.tables import format_tables
+from eval.records import read_records, reference_of
 from jax3dc.cli_args import positive_int, positive_float
 from jax3dc.errors import InputFileError, Jax3dcError
+from jax3dc.grounding import Grounding
+from jax3dc.release import default_structure_model
+from jax3dc.structure import boxes_to_dict, to_dict
+from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
 
 ALL_SPLITS = "all"  # --split value that reads every shard and keeps every record
 
 
 def _write_references(refs: list, path: Path) -> None:
     """references.jsonl in the format of ``jax3dc eval metrics --ref`` (to rescore without shards)."""
-    from jax3dc.structure import boxes_to_dict, to_dict
-
     with path.open("w", encoding="utf-8") as f:
         for ref in refs:
             line = {"key": ref.key, "structure": to_dict(ref.structure), "boxes": boxes_to_dict(ref.boxes)}
@@ -48,15 +57,10 @@ def source_folders(folders: list[str]) -> dict[str, Path]:
 
 
 def run_eval(args: argparse.Namespace) -> int:
-    from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
-
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
-    from data_pipeline.shards import shard_paths
-    from eval.records import read_records, reference_of
-    from jax3dc.grounding import Grounding
+    # lazy: `jax3dc --help` imports this module; the decoder costs it 37 ms more, the report (overlays,
+    # viewers, the part rebuilder) 43 ms
     from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
-    from eval.metrics.cases import build_cases, load_predictions
-    from eval.metrics.tables import format_tables
     from eval.report import write_report
 
     sources = [args.predictions is not None, args.reference_as_prediction, args.checkpoint is not None]
@@ -66,7 +70,6 @@ def run_eval(args: argparse.Namespace) -> int:
         raise Jax3dcError("--ground-joints grounds structures as a checkpoint decodes them (--task structure); to ground "
                           "a predictions file, run python3 -m bench.joint_grounding")
     if not any(sources):  # the shipped default model
-        from jax3dc.release import default_structure_model
 
         args.checkpoint = str(default_structure_model())
     split = None if args.split == ALL_SPLITS else args.split  # None: every shard, every record
@@ -91,7 +94,7 @@ def run_eval(args: argparse.Namespace) -> int:
     if args.task == "code":
         return _run_code(args, records, out)
     if args.task == "parameters":
-        from eval.parameters_run import run_parameters_task
+        from eval.parameters_run import run_parameters_task  # lazy: the decoder and factories (62 ms)
 
         return run_parameters_task(args, records, out)
     notes = []
@@ -113,7 +116,7 @@ def run_eval(args: argparse.Namespace) -> int:
         preds = {key: line["text"] for key, line in lines.items()}
         name = Path(args.checkpoint).name
         if args.candidates > 1 or args.repair:
-            from eval.run_verify import verify_predictions
+            from eval.run_verify import verify_predictions  # lazy: the verifier and its pool (76 ms)
 
             preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair,
                                                  source_folders(args.sources), args.physics_backend)
@@ -136,12 +139,7 @@ def run_eval(args: argparse.Namespace) -> int:
 
 def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     """The code task: programs from the checkpoint (or --predictions, or the records' own), scored."""
-    from tqdm import tqdm
-
-
-    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
-    from eval.metrics.cases import load_predictions
-    from eval.metrics.programs import score_program, summarise
+    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions  # lazy: as in run_eval (37 ms)
 
     if args.candidates > 1 or args.repair:
         raise Jax3dcError("--candidates and --repair choose structures; the code task takes neither")

@@ -21,6 +21,8 @@ from pathlib import Path
 
 from data_pipeline.record import Record
 from data_pipeline.record_parts import record_parts
+from jax3dc.physics.candidate_verdicts import start_shapes
+from jax3dc.physics.mjx_service import DeviceService, init_worker
 from jax3dc.verify.repair import Repaired, repair
 from jax3dc.verify.select import Candidate, Choice, choose
 from jax3dc.verify.verdicts import Physics, VerdictCache
@@ -72,9 +74,6 @@ def verify_many(jobs: Sequence[Job], workers: int, backend: str = "c", dynamics:
 def _device_service(stack: contextlib.ExitStack, context, workers: int) -> dict:
     """The MJX launches of every worker's candidates gathered in this process (``mjx_service``),
     stopped when ``stack`` closes; the pool's initializer arguments that connect the workers to it."""
-    from jax3dc.physics.candidate_verdicts import start_shapes
-    from jax3dc.physics.mjx_service import DeviceService, init_worker
-
     device = DeviceService(context, workers, start_shapes=start_shapes())
     stop = threading.Event()
     server = threading.Thread(target=device.serve, args=(stop,), daemon=True)

@@ -18,9 +18,13 @@ from typing import Any, Mapping, Sequence
 from PIL import Image
 from tqdm import tqdm
 
+from data_pipeline.record_parts import record_parts
 from eval.metrics.score import Case, Evaluation
 from jax3dc.errors import Jax3dcError
+from jax3dc.export.gltf import gltf_bytes
 from jax3dc.physics.findings import Verdict
+from jax3dc.physics.verdict import verdict_with_curves
+from jax3dc.viewer import ViewerInputs, write_viewer
 
 VIEWERS_DIR = "viewers"
 THUMB_PX = 128
@@ -46,11 +50,6 @@ def write_thumbnail(image_png: bytes, path: Path) -> None:
 
 def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], path: Path) -> Verdict:
     """The viewer of one parsed prediction; returns its physics verdict."""
-    from jax3dc.physics.verdict import verdict_with_curves
-    from data_pipeline.record_parts import record_parts
-    from jax3dc.export.gltf import gltf_bytes
-    from jax3dc.viewer import ViewerInputs, write_viewer
-
     try:
         parts, scale, mounted = record_parts(record, sources)
     except KeyError as e:  # a record from before the build wrote what rebuilding needs

@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import trimesh
+from PIL import Image
 
 from jax3dc.errors import SetupError
 from jax3dc.gl import configure_gl
@@ -611,14 +612,10 @@ def paint_segmentation(ids: np.ndarray, palette: np.ndarray) -> np.ndarray:
 
 def png_bytes(image: np.ndarray) -> bytes:
     """Deterministic PNG (fixed compression, no metadata chunks)."""
-    from PIL import Image
-
     buf = io.BytesIO()
     Image.fromarray(np.ascontiguousarray(image)).save(buf, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
     return buf.getvalue()
 
 
 def png_array(data: bytes) -> np.ndarray:
-    from PIL import Image
-
     return np.asarray(Image.open(io.BytesIO(data)).convert("RGB"))

@@ -27,6 +27,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 import jax
+from flax import nnx
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 MESH_AXES = ("data", "fsdp", "tensor")
@@ -185,8 +186,6 @@ def param_logical_axes(variable: Any) -> tuple[str | None, ...]:
 def state_shardings(state: Any, mesh: Mesh, rules: Rules = LOGICAL_RULES) -> Any:
     """A pytree like ``state`` (an nnx State, e.g. of ``nnx.eval_shape(...)``) holding the
     NamedSharding of each variable, computed from its logical axes and shape."""
-    from flax import nnx
-
     mesh_shape = dict(mesh.shape)
 
     def one(v):
@@ -198,7 +197,5 @@ def state_shardings(state: Any, mesh: Mesh, rules: Rules = LOGICAL_RULES) -> Any
 
 def model_shardings(abstract_model: Any, mesh: Mesh, rules: Rules = LOGICAL_RULES) -> Any:
     """NamedShardings of every parameter of an abstract (``nnx.eval_shape``) model, as an nnx State."""
-    from flax import nnx
-
     return state_shardings(nnx.state(abstract_model), mesh, rules)
 

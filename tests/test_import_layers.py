@@ -1,12 +1,16 @@
-"""The layout's two rules, read from the source with ``ast`` (nothing is imported, so it takes well
-under a second): the core ``jax3dc/`` imports nothing of the packages built on it, also inside
-functions or by name through ``importlib``; and no two files import each other, directly or round
-a longer loop. Importing ``a.b.c`` from outside ``a.b`` runs ``a/b/__init__.py`` too, so that
+"""The layout's import rules, read from the source with ``ast`` and ``tokenize`` (nothing is
+imported, so it takes well under a second): the core ``jax3dc/`` imports nothing of the packages
+built on it, also inside functions or by name through ``importlib``; no two files import each
+other, directly or round a longer loop; and an import inside a function says why it is not at the
+top of its file. Importing ``a.b.c`` from outside ``a.b`` runs ``a/b/__init__.py`` too, so that
 counts as an import of the package file as well."""
 
 from __future__ import annotations
 
 import ast
+import io
+import re
+import tokenize
 from pathlib import Path
 
 import pytest
@@ -14,6 +18,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 CORE = "jax3dc"
 ABOVE_CORE = ("data_pipeline", "train", "eval", "bench", "tests", "scripts")
+PRODUCT = (CORE, "data_pipeline", "train", "eval", "bench")  # held to the top-of-file rule
+LAZY_REASON = re.compile(r"\blazy:\s*\S")  # "# lazy: <the measured cost, or the optional dependency>"
 
 
 def module_files(root: Path, packages: tuple[str, ...]) -> dict[str, Path]:
@@ -112,6 +118,62 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
+def _comments(text: str) -> dict[int, str]:
+    """Line -> the comment on it (a ``#`` inside a string is none)."""
+    tokens = tokenize.generate_tokens(io.StringIO(text).readline)
+    return {t.start[0]: t.string for t in tokens if t.type == tokenize.COMMENT}
+
+
+def _previous_statement(tree: ast.AST) -> dict[ast.stmt, ast.stmt | None]:
+    """Statement -> the one before it in the same block (None for a block's first)."""
+    previous = {}
+    for node in ast.walk(tree):
+        for field in ("body", "orelse", "finalbody"):
+            block = getattr(node, field, None)
+            if isinstance(block, list):
+                previous.update(zip(block, [None, *block]))
+    return previous
+
+
+def unexplained_lazy_imports(root: Path, packages: tuple[str, ...]) -> list[str]:
+    """``path:line`` of each import inside a function body that no ``# lazy: why`` explains: on
+    its own lines, on the comment lines just above it, or above the run of imports it closes (one
+    statement per line, blank lines between groups allowed), so one reason covers a block."""
+    found = []
+    for package in packages:
+        for path in sorted((root / package).rglob("*.py")):
+            text = path.read_text(encoding="utf-8")
+            lines = text.splitlines()
+            comments = _comments(text)
+            tree = ast.parse(text, str(path))
+            previous = _previous_statement(tree)
+
+            def reason_above(line: int) -> bool:
+                while line >= 1 and lines[line - 1].lstrip().startswith("#"):
+                    if LAZY_REASON.search(comments.get(line, "")):
+                        return True
+                    line -= 1
+                return False
+
+            def explained_above(node: ast.stmt) -> bool:
+                """By the comment above it or above the run of imports it closes."""
+                before = previous.get(node)
+                return reason_above(node.lineno - 1) or (
+                    isinstance(before, (ast.Import, ast.ImportFrom))
+                    and not any(line.strip() for line in lines[before.end_lineno:node.lineno - 1])
+                    and explained_above(before))
+
+            def explained(node: ast.stmt) -> bool:
+                own = range(node.lineno, node.end_lineno + 1)
+                return any(LAZY_REASON.search(comments.get(n, "")) for n in own) or explained_above(node)
+
+            lazy = {node for func in ast.walk(tree) if isinstance(func, (ast.FunctionDef, ast.AsyncFunctionDef))
+                    for node in ast.walk(func) if isinstance(node, (ast.Import, ast.ImportFrom))}
+            found += [f"{path.relative_to(root)}:{node.lineno}"
+                      for node in sorted(lazy, key=lambda n: (n.lineno, n.col_offset)) if not explained(node)]
+    return found
+
+
 def test_core_imports_nothing_above_it():
     graph, lines = import_graph(ROOT, (CORE, *ABOVE_CORE))
     assert back_edges(graph, lines) == []
@@ -120,6 +182,39 @@ def test_core_imports_nothing_above_it():
 def test_no_import_cycle_between_files():
     graph, _ = import_graph(ROOT, (CORE, *ABOVE_CORE))
     assert cycles(graph) == []
+
+
+def test_every_import_inside_a_function_says_why():
+    assert unexplained_lazy_imports(ROOT, PRODUCT) == []
+
+
+def test_lazy_import_check_finds_the_unexplained(tmp_path: Path):
+    (tmp_path / "train").mkdir()
+    (tmp_path / "train" / "a.py").write_text(
+        "import json\n"
+        "def f():\n"
+        "    import torch  # lazy: optional, the test extra only\n"
+        "    # lazy: mujoco (0.1 s) only for the physics path\n"
+        "    import mujoco\n"
+        "    from pxr import Usd\n"
+        "    x = '# lazy: a string, not a comment'; import scipy\n"
+        "    # measured nothing\n"
+        "    import tqdm\n"
+        "    def g():\n"
+        "        import PIL  # noqa\n"
+        "class C:\n"
+        "    def m(self):\n"
+        "        # lazy:\n"
+        "        import jax\n"
+        "def h():\n"
+        "    # lazy: optax (0.1 s) for training only\n"
+        "    import optax\n"
+        "\n"
+        "    from train.loop import run\n"
+        "    run()\n"
+        "    import orbax\n")
+    assert unexplained_lazy_imports(tmp_path, ("train",)) == ["train/a.py:7", "train/a.py:9", "train/a.py:11",
+                                                              "train/a.py:15", "train/a.py:22"]
 
 
 @pytest.fixture

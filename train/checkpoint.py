@@ -21,6 +21,7 @@ from typing import Any
 import jax
 import numpy as np
 import orbax.checkpoint as ocp
+from jax.experimental import multihost_utils
 from orbax.checkpoint import checkpoint_managers as policies
 
 from jax3dc.errors import Jax3dcError
@@ -34,7 +35,6 @@ def _all_processes(state: dict) -> list[dict]:
     """Every process's loader state, in process order (a collective: all processes call it)."""
     if jax.process_count() == 1:
         return [state]
-    from jax.experimental import multihost_utils
 
     data = np.frombuffer(json.dumps(state, sort_keys=True).encode(), np.uint8)
     longest = int(np.max(multihost_utils.process_allgather(np.asarray(data.size, np.int64))))

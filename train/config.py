@@ -16,6 +16,7 @@ from jax3dc import sharding
 from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR
 from jax3dc.errors import Jax3dcError
 from jax3dc.model.layer_stack import REMAT_POLICIES
+from jax3dc.model.lora import LoraSpec
 
 if TYPE_CHECKING:
     from jax3dc.model.lora import LoraSpec
@@ -204,8 +205,6 @@ def sharding_rules(cfg: TrainConfig) -> sharding.Rules:
 
 def lora_spec(cfg: TrainConfig) -> LoraSpec:
     """The run's LoraSpec (lora_rank must be > 0); ConfigError for an unknown target."""
-    from jax3dc.model.lora import LoraSpec
-
     try:
         return LoraSpec(cfg.lora_rank, cfg.lora_alpha, cfg.lora_targets)
     except ValueError as e:

@@ -20,6 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
+from jax.experimental import multihost_utils
 from jax.sharding import Mesh
 
 from jax3dc import sharding
@@ -259,7 +260,7 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
 
 def _check_val_data(cfg: TrainConfig, trainer: Trainer) -> None:
     """Reads one validation batch; the loader's error is re-raised with how to go on without."""
-    from data_pipeline.loader import LoaderError
+    from data_pipeline.loader import LoaderError  # lazy: as in train.data.make_loader (0.06 s)
 
     try:
         next(make_loader(cfg, trainer.model.config, "val", trainer.tokenizer, trainer.processor))
@@ -274,7 +275,5 @@ def _out_of_time(deadline: float | None) -> bool:
         return False
     late = time.monotonic() > deadline
     if jax.process_count() > 1:
-        from jax.experimental import multihost_utils
-
         late = bool(multihost_utils.broadcast_one_to_all(np.asarray(late)))
     return late

@@ -24,6 +24,8 @@ import os
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from tqdm import tqdm
+
 PEAK_FLOPS = {  # dense bf16 FLOP/s, from the vendor data sheets (SXM parts)
     "H100": 989e12,
     "H200": 989e12,
@@ -96,13 +98,12 @@ class MetricsLog:
         os.makedirs(directory, exist_ok=True)
         self._file = open(self.path, "a", buffering=1)
         try:
-            from tensorboardX import SummaryWriter
+            from tensorboardX import SummaryWriter  # lazy: an optional package
         except ImportError:  # TensorBoard is optional: the JSONL file holds everything
             SummaryWriter = None
         if SummaryWriter is not None:
             self._tb = SummaryWriter(os.path.join(directory, "tensorboard"))
         if progress:
-            from tqdm import tqdm
             self._bar = tqdm(total=total_steps, initial=first_step, desc="train", unit="step",
                              dynamic_ncols=True)
 
@@ -148,10 +149,10 @@ def read_metrics(path: str, kind: str = "train") -> list[dict]:
 
 def plot_losses(run_dir: str) -> str:
     """loss.png in the run folder: training loss and accuracy per step, validation loss on top."""
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.31 s with pyplot), once at the end of a run
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: after the Agg backend is chosen
 
     path = os.path.join(run_dir, METRICS_FILE)
     train, val = read_metrics(path), read_metrics(path, "val")

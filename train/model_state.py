@@ -18,11 +18,13 @@ import numpy as np
 from flax import nnx
 from jax.sharding import Mesh
 
+from jax3dc.model import params as hf_params
 from jax3dc.processing.bpe import config_for_tokenizer
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.lora import add_lora
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.model.random_weights import build_random
+from jax3dc.processing.chat import VL_CHAT_TEMPLATE
 from jax3dc.sharding import model_shardings
 from train.config import ConfigError, TrainConfig, lora_spec, sharding_rules
 from train.optimizer import trainable_filter
@@ -124,8 +126,6 @@ def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, toke
 
 
 def _load_hf(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None) -> Qwen3VL:
-    from jax3dc.model import params as hf_params
-
     compute, master = dtypes(cfg)
     model, _ = hf_params.load_pretrained(cfg.init, dtype=compute if cfg.lora_rank else master, mesh=mesh,
                                          rules=sharding_rules(cfg), compute_dtype=compute,
@@ -141,9 +141,6 @@ def export_hf(state: ModelState, directory: str, tokenizer=None, processor=None,
 
     With several processes every process must call this (each tensor is gathered from all of
     them, one at a time); only process 0 writes."""
-    from jax3dc.model import params as hf_params
-    from jax3dc.processing.chat import VL_CHAT_TEMPLATE
-
     model = state.merged()
     hf_params.save_pretrained(model, model.config, directory)
     if jax.process_index() != 0:

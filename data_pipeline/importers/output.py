@@ -12,15 +12,14 @@ from pathlib import Path
 
 from data_pipeline.importers.assemble import ImportedObject
 from jax3dc.errors import InputFileError
+from jax3dc.geometry.parts import save_parts
+from jax3dc.structure import save_boxes, to_json
 
 _PART_FILE = re.compile(r"^\d+\.(obj|stl|ply|glb)$")
 
 
 def write_imported(obj: ImportedObject, out_dir: Path) -> None:
     """Write ``obj`` under ``out_dir``; part files left from an earlier conversion are replaced."""
-    from jax3dc.geometry.parts import save_parts
-    from jax3dc.structure import save_boxes, to_json
-
     out_dir = Path(out_dir)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)

@@ -18,9 +18,13 @@ from typing import Callable, Iterable, Iterator
 import numpy as np
 import trimesh
 
+from data_pipeline.importers.source import import_object
 from eval.verdict_accuracy.mutations import Mutation, mutations_of
+from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.physics.verdict import check_object
 from jax3dc.mounted import is_mounted
+from jax3dc.physics.kinematics import (SAME_MOTION_TOL_NU, same_line, subtree_points, subtree_vertices_at,
+                                       sweep_distance, symmetric_about)
 from jax3dc.structure.schema import Structure
 
 
@@ -34,7 +38,6 @@ class GroundTruthObject:
 
 
 def factory_objects(categories: Iterable[str], seeds: Iterable[int]) -> Iterator[GroundTruthObject]:
-    from jax3dc.factories import FACTORIES, generate_object
     for category in categories:
         for seed in seeds:
             obj = generate_object(category, seed)
@@ -45,7 +48,6 @@ def factory_objects(categories: Iterable[str], seeds: Iterable[int]) -> Iterator
 def imported_objects(directories: Iterable[Path]) -> Iterator[GroundTruthObject]:
     """Imported objects, mounted where their category is (a PartNet-Mobility door, window or switch
     is set in a wall: stood free on a floor its frame would fall over)."""
-    from data_pipeline.importers.source import import_object
     for directory in directories:
         obj = import_object(Path(directory))
         yield GroundTruthObject(Path(directory).name, obj.structure, obj.parts, float(obj.meta.get("scale", 1.0)),
@@ -81,8 +83,6 @@ def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, tri
     knob, a wheel) occupies the same space whatever its range. A changed parent is compared state
     by state over random states of all joints (a new parent welded to the old one moves the same).
     """
-    from jax3dc.physics.kinematics import (SAME_MOTION_TOL_NU, same_line, subtree_points, subtree_vertices_at,
-                                           sweep_distance, symmetric_about)
     before, after = original.nodes[mutation.part], mutation.structure.nodes[mutation.part]
     if before.parent != after.parent:
         a = subtree_vertices_at(original, parts, mutation.part)

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jax3dc.constrained.automaton import lift, token_bytes
-from jax3dc.constrained.parameters_grammar import close_costs, parameters_automaton
+from jax3dc.constrained.parameters_grammar import _pieces, close_costs, parameters_automaton, value_words
 from jax3dc.parameters import Schema
 
 MAX_TOKEN_BYTES = 24
@@ -78,8 +78,6 @@ def parameters_tables(schemas: Mapping[str, Schema], tokenizer, vocab_size: int)
 def longest_text(schemas: Mapping[str, Schema]) -> int:
     """Bytes of the longest text any record of ``schemas`` can have: a token budget this large
     never cuts a row short."""
-    from jax3dc.constrained.parameters_grammar import _pieces, value_words
-
     longest = 0
     for schema in schemas.values():
         pieces = _pieces(schema)

@@ -24,6 +24,7 @@ axis / plane strings and a name's type (mesh or material), which the functions c
 from __future__ import annotations
 
 import functools
+import heapq
 import inspect
 import keyword
 from dataclasses import dataclass, field
@@ -303,8 +304,6 @@ def close_costs(a: ProgramAutomaton) -> np.ndarray:
     length read inside one), names need a bound one where they close as a reference, and 'part('
     needs a bound name. Argument-name states take their dearest way out (keyword or reference),
     since the device does not know which one the name read so far leads to."""
-    import heapq
-
     n = len(a.edges)
     inf = np.iinfo(np.int32).max // 4
     cost = np.full((n, 2, 2), inf, np.int64)

@@ -9,28 +9,25 @@ from pathlib import Path
 
 from jax3dc.cli_args import positive_int
 from jax3dc.errors import InputFileError, Jax3dcError
+from jax3dc.export.blender import export_blender
 from jax3dc.export.files import check_file_stem
-from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES
+from jax3dc.export.gltf import export_gltf
+from jax3dc.export.mjcf import export_mjcf
+from jax3dc.export.urdf import export_urdf
+from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES, check_object_faces
+from jax3dc.geometry.parts import load_parts
+from jax3dc.mounted import is_mounted
+from jax3dc.structure import parse_structure
 
 FORMATS = ("urdf", "mjcf", "gltf", "usd", "blender")
 PIECE_FORMATS = ("urdf", "mjcf", "usd")  # they collide through the parts' convex pieces, whose cost --max-faces caps
 
 
 def _exporter(fmt: str):
-    if fmt == "urdf":
-        from jax3dc.export.urdf import export_urdf
-        return export_urdf
-    if fmt == "mjcf":
-        from jax3dc.export.mjcf import export_mjcf
-        return export_mjcf
-    if fmt == "gltf":
-        from jax3dc.export.gltf import export_gltf
-        return export_gltf
     if fmt == "usd":
-        from jax3dc.export.usd import export_usd
+        from jax3dc.export.usd import export_usd  # lazy: pxr, 0.10 s, for the one format that writes USD
         return export_usd
-    from jax3dc.export.blender import export_blender
-    return export_blender
+    return {"urdf": export_urdf, "mjcf": export_mjcf, "gltf": export_gltf, "blender": export_blender}[fmt]
 
 
 def _scale_from_meta(structure_path: Path) -> float | None:
@@ -58,9 +55,6 @@ def _category_from_meta(structure_path: Path) -> str | None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from jax3dc.geometry.parts import load_parts
-    from jax3dc.structure import parse_structure
-
     structure_path = Path(args.structure)
     try:
         text = structure_path.read_text(encoding="utf-8")
@@ -84,10 +78,8 @@ def _run(args: argparse.Namespace) -> int:
         raise Jax3dcError("--free, --mounted and --actuators are options of --format mjcf")
     base = ""
     if args.format in PIECE_FORMATS:
-        from jax3dc.geometry.mesh_size import check_object_faces
         check_object_faces(parts, args.max_faces, f"the {args.format.upper()} export (its convex collision pieces)")
     if args.format == "mjcf":
-        from jax3dc.mounted import is_mounted
         category = _category_from_meta(structure_path)
         mounted = is_mounted(category) if args.mounted is None else args.mounted
         path = _exporter(args.format)(structure, parts, args.out, scale, model_name=name, free=args.free,

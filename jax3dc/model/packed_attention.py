@@ -17,6 +17,7 @@ import math
 import flax.struct
 import jax
 import jax.numpy as jnp
+from jax._src.cudnn.fused_attention_stablehlo import MaskType, dot_product_attention
 
 
 @flax.struct.dataclass
@@ -63,7 +64,6 @@ def packed_attention(q: jax.Array, k: jax.Array, v: jax.Array, rows: PackedRows,
     neither is scored."""
     if implementation != "cudnn":
         return jax.nn.dot_product_attention(q, k, v, mask=segment_mask(rows.segment_ids), implementation=implementation)
-    from jax._src.cudnn.fused_attention_stablehlo import MaskType, dot_product_attention
 
     return dot_product_attention(q, k, v, q_seqlen=rows.lengths, kv_seqlen=rows.lengths, q_offsets=rows.offsets,
                                  kv_offsets=rows.offsets, scale=1.0 / math.sqrt(q.shape[-1]),

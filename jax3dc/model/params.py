@@ -27,6 +27,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from flax import nnx
+from jax.experimental import multihost_utils
 
 from jax3dc.errors import InputFileError
 from jax3dc.model.config import Qwen3VLConfig
@@ -227,7 +228,6 @@ def kernel_input_dims(model: Qwen3VL) -> dict[str, int]:
 def _to_host(x: jax.Array) -> np.ndarray:
     if x.is_fully_addressable:
         return np.asarray(jax.device_get(x))
-    from jax.experimental import multihost_utils
 
     return np.asarray(multihost_utils.process_allgather(x, tiled=True))
 

@@ -36,6 +36,7 @@ import trimesh
 
 from jax3dc.physics import cpu_backend
 from jax3dc.physics.findings import Verdict
+from jax3dc.physics.mjx_service import installed_client
 from jax3dc.physics.verdict import check_names, kinematic_inputs, penetration_model, verdict_from
 from jax3dc.structure.schema import Structure
 
@@ -51,7 +52,7 @@ START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=10
 def start_shapes() -> dict:
     """What a process's first candidate launch is padded to on this platform (``mjx_batch.Shapes``
     fields; none on a CPU: the size classes the launch needs)."""
-    import jax
+    import jax  # lazy: jax (0.39 s) stays out of the CPU physics path, which loads none of it
 
     return {} if jax.default_backend() == "cpu" else START_SHAPES
 
@@ -100,11 +101,11 @@ def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | No
     """In a worker of a device service (``mjx_service``), the service's launch, shared with the other
     workers' requests; else one launch in this process."""
     global _largest
-    from jax3dc.physics.mjx_service import installed_client
 
     service = installed_client()
     if service is not None:
         return service.many(models, qpos)
+    # lazy: MJX and jax (0.46 s), for a launch in this process only
     from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
 
     with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use

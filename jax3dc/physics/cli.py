@@ -24,7 +24,11 @@ from typing import Any
 from jax3dc.cli_args import command_group, positive_int
 from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR
 from jax3dc.errors import InputFileError, Jax3dcError
-from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES
+from jax3dc.geometry.mesh_size import MAX_PART_FACES, PHYSICS_MAX_FACES, check_object_faces
+from jax3dc.geometry.parts import load_parts
+from jax3dc.physics.exported import is_mjcf, load_exported
+from jax3dc.physics.verdict import check_object
+from jax3dc.structure import parse_structure
 
 VERDICT_HELP = (
     'The verdict is JSON: {"ok": bool, "joints": {"<part id>": {"ok": bool, "reasons": [...], "warnings": [...]}}, '
@@ -88,12 +92,6 @@ def _checked_scale(scale: float, where: Path) -> float:
 
 
 def run_check(args: argparse.Namespace) -> int:
-    from jax3dc.physics.exported import is_mjcf, load_exported
-    from jax3dc.physics.verdict import check_object
-    from jax3dc.geometry.mesh_size import check_object_faces
-    from jax3dc.geometry.parts import load_parts
-    from jax3dc.structure import parse_structure
-
     if is_mjcf(args.structure):
         if args.parts is not None or args.scale is not None:
             raise Jax3dcError("--parts and --scale go with a structure: an MJCF file has its meshes and scale")

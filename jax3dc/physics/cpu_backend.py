@@ -8,6 +8,7 @@ penetration check alone, rollout with distance sensors is the path without the G
 
 from __future__ import annotations
 
+import multiprocessing as mp
 import os
 from concurrent.futures import ThreadPoolExecutor
 
@@ -80,8 +81,6 @@ class PairDistancePool:
     can time the work without the pool's start-up."""
 
     def __init__(self, xml: str, assets: dict[str, bytes], workers: int | None = None):
-        import multiprocessing as mp
-
         self.workers = workers or os.cpu_count() or 1
         # spawned: a forked child would inherit the parent's JAX threads and their locks
         self._pool = mp.get_context("spawn").Pool(self.workers, initializer=_init_worker, initargs=(xml, assets))

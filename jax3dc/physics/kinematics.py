@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import trimesh
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from jax3dc.structure.schema import Joint, Structure
@@ -98,7 +99,6 @@ def symmetric_about(points: np.ndarray, joint: Joint, tol: float = SAME_MOTION_T
     axis line: a round knob or wheel turned about its own axis occupies the same space."""
     if joint.type != "hinge":
         return False
-    from scipy.spatial import cKDTree
     tree = cKDTree(points)
     for angle in np.linspace(0, 2 * np.pi, turns + 2)[1:-1]:
         if tree.query(joint_motion(joint, float(angle), points))[0].max() > tol * 2:

@@ -12,7 +12,7 @@ DEFAULT_MAX_NEW_TOKENS = 2048  # here, not in ``models``: the CLI's --help shows
 
 def __getattr__(name: str):
     if name in __all__:
-        from jax3dc.predict import pipeline
+        from jax3dc.predict import pipeline  # lazy: see above (1.7 s alone, 0.25 s after `jax3dc --help`)
 
         return getattr(pipeline, name)
     raise AttributeError(f"module 'jax3dc.predict' has no attribute {name!r}")

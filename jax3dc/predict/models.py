@@ -14,6 +14,8 @@ from typing import Callable
 
 import numpy as np
 
+from jax3dc.constrained.parameters import longest_text
+from jax3dc.factories.registry import SCHEMAS
 from jax3dc.grounding import Grounding
 from jax3dc.render import png_bytes
 from jax3dc.sampler import DecodeOptions, Sampler
@@ -73,9 +75,6 @@ def parameters_model(sampler: Sampler, max_new_tokens: int, constrained: bool = 
     factory's category and parameters (greedy; under the parameter grammar of the factories'
     schemas unless ``constrained`` is off). The budget is at most one token per byte of the longest
     text the schemas allow, and the stop token."""
-    from jax3dc.constrained.parameters import longest_text
-    from jax3dc.factories.registry import SCHEMAS  # here: the other backends never load the factories
-
     budget = min(max_new_tokens, longest_text(SCHEMAS) + 1)
     options = DecodeOptions(constrained=constrained, schemas=SCHEMAS)
     return lambda rgb: generate_texts(sampler, ImageExample(png_bytes(rgb), b"", ""), "parameters", budget,

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from jax3dc.program.polygon import signed_area, triangulate
@@ -249,8 +250,6 @@ def sweep(path: np.ndarray, profile: np.ndarray) -> Solid:
 
 def chamfered_box(size, width: float, center) -> Solid:
     """A box with every edge cut at 45 degrees by `width` (convex hull of three shrunk boxes)."""
-    from scipy.spatial import ConvexHull
-
     half = np.asarray(size, dtype=np.float64) / 2.0
     signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
     points = []

@@ -7,6 +7,9 @@ import webbrowser
 from pathlib import Path
 
 from jax3dc.cli_args import positive_float
+from jax3dc.viewer.page import write_viewer
+from jax3dc.viewer.serve import page_url, start_server
+from jax3dc.viewer.sources import view_inputs
 
 DESCRIPTION = """\
 Write the interactive 3D viewer of an object (an HTML page) and open it in the web browser.
@@ -27,9 +30,6 @@ Example: jax3dc view prediction/
 
 
 def run(args: argparse.Namespace) -> int:
-    from jax3dc.viewer.page import write_viewer
-    from jax3dc.viewer.sources import view_inputs
-
     inputs, default_page = view_inputs(args.path, args.parts, args.scale)
     page = write_viewer(inputs, Path(args.out) if args.out else default_page)
     print(f"wrote {page}")
@@ -37,7 +37,6 @@ def run(args: argparse.Namespace) -> int:
         if not args.no_open:
             webbrowser.open(page.resolve().as_uri())
         return 0
-    from jax3dc.viewer.serve import page_url, start_server
 
     server = start_server(page.parent, args.port)
     url = page_url(server, page.name)

@@ -10,6 +10,10 @@ import json
 from pathlib import Path
 
 from jax3dc.errors import InputFileError
+from jax3dc.export.cli import _scale_from_meta  # the scale rule of `jax3dc export`
+from jax3dc.export.gltf import gltf_bytes
+from jax3dc.geometry.parts import load_parts
+from jax3dc.structure import parse_structure
 from jax3dc.viewer.page import ViewerInputs
 
 PAGE_NAME = "viewer.html"
@@ -37,11 +41,6 @@ def read_verdict(path: Path) -> dict | None:
 
 
 def _structure_glb(structure_path: Path, parts_dir: Path, scale: float | None) -> bytes:
-    from jax3dc.export.cli import _scale_from_meta  # the scale rule of `jax3dc export`
-    from jax3dc.export.gltf import gltf_bytes
-    from jax3dc.geometry.parts import load_parts
-    from jax3dc.structure import parse_structure
-
     try:
         text = structure_path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
