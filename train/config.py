@@ -16,6 +16,7 @@ from jax3dc import sharding
 from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR
 from jax3dc.errors import Jax3dcError
 from jax3dc.model.layer_stack import REMAT_POLICIES
+from train.adam_moments import MOMENT_DTYPES
 
 if TYPE_CHECKING:
     from jax3dc.model.lora import LoraSpec
@@ -93,6 +94,10 @@ class TrainConfig:
     # state in float32 (else in the compute dtype, half the memory).
     compute_dtype: str = "bfloat16"
     master_fp32: bool = True
+    # Adam's two moments: "" keeps them in the trainable weights' dtype; "bfloat16" stores both in
+    # bf16 (stochastically rounded, update math in float32) under fp32 master weights: the 4B's
+    # moments take 17.6 GB instead of 35 (train/adam_moments.py, bench/train_memory.py).
+    moments_dtype: str = ""
     attention: str = "auto"  # auto: cuDNN fused attention on GPU, XLA elsewhere; or cudnn / xla
     # Decoder-layer rematerialisation policy (jax3dc/model/layer_stack.py): full recomputes each
     # layer in the backward pass, minimal keeps its matmul outputs, qkv its q/k/v projections, none
@@ -235,6 +240,9 @@ def validate(cfg: TrainConfig) -> None:
         raise ConfigError(f"lora_rank must be >= 0 (0: no LoRA), got {cfg.lora_rank}")
     if cfg.lora_rank:
         lora_spec(cfg)
+    if cfg.moments_dtype not in ("", *MOMENT_DTYPES):
+        raise ConfigError(f"moments_dtype {cfg.moments_dtype!r}: expected empty (the weights' dtype) or one of "
+                          f"{', '.join(MOMENT_DTYPES)}")
     if cfg.compute_dtype not in ("bfloat16", "float32", "float16"):
         raise ConfigError(f"compute_dtype {cfg.compute_dtype!r}: expected bfloat16, float32 or float16")
     for name in ("steps", "seq_len", "log_every", "eval_every", "save_every", "keep_last"):
