@@ -1,9 +1,9 @@
 """Adam's scaling with both moments stored in a narrower dtype than the master weights (issue 51).
 
-fp32 master weights with fp32 moments of the 4B config (17.6 GB of weights, 35 GB of moments,
-17.6 GB of gradients) do not fit one 80 GB card; bf16 weights do not learn (an lr-1e-5 update is
-below bf16's resolution). Keeping the weights in fp32 and only the moments in bf16 halves the
-moments. optax's ``scale_by_adam`` narrows the first moment only (``mu_dtype``), so this keeps
+fp32 master weights with fp32 moments of the 4B config (vision frozen: 16.1 GB of weights,
+32.2 GB of moments, 16.1 GB of gradients, bench/train_memory.py) leave too little of one 80 GB
+card for activations; bf16 weights do not learn (an lr-1e-5 update is below bf16's resolution).
+Keeping the weights in fp32 and only the moments in bf16 halves the moments. optax's ``scale_by_adam`` narrows the first moment only (``mu_dtype``), so this keeps
 both in the chosen dtype, reads them back to float32 for the update, and stores them with
 stochastic rounding.
 

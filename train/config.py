@@ -96,7 +96,7 @@ class TrainConfig:
     master_fp32: bool = True
     # Adam's two moments: "" keeps them in the trainable weights' dtype; "bfloat16" stores both in
     # bf16 (stochastically rounded, update math in float32) under fp32 master weights: the 4B's
-    # moments take 17.6 GB instead of 35 (train/adam_moments.py, bench/train_memory.py).
+    # moments take 16.1 GB instead of 32.2 (train/adam_moments.py, bench/train_memory.py).
     moments_dtype: str = ""
     attention: str = "auto"  # auto: cuDNN fused attention on GPU, XLA elsewhere; or cudnn / xla
     # Decoder-layer rematerialisation policy (jax3dc/model/layer_stack.py): full recomputes each
