@@ -26,24 +26,30 @@ import optax
 MOMENT_DTYPES = ("float32", "bfloat16")
 
 
-def round_to_bfloat16(x: jax.Array, key: jax.Array) -> jax.Array:
-    """float32 -> bfloat16, rounding up with probability equal to the dropped fraction.
+def round_to_bfloat16(x: jax.Array, noise: jax.Array) -> jax.Array:
+    """float32 -> bfloat16, rounding the magnitude up with probability equal to the dropped fraction.
 
-    A bfloat16 is the upper 16 bits of a float32: adding 16 random bits below them and
-    truncating rounds the magnitude up exactly that often (inf and nan stay as they are)."""
+    A bfloat16 is the upper 16 bits of a float32: adding `noise` (uniform in [0, 2^16), uint32)
+    to the 16 bits below them and truncating rounds up exactly that often (inf and nan stay)."""
     bits = jax.lax.bitcast_convert_type(x.astype(jnp.float32), jnp.uint32)
-    noise = jax.random.bits(key, x.shape, jnp.uint32) >> 16
     truncated = (bits + noise) & jnp.uint32(0xFFFF0000)
     return jax.lax.bitcast_convert_type(truncated, jnp.float32).astype(jnp.bfloat16)
 
 
-def _store(tree: Any, dtype: jnp.dtype, key: jax.Array) -> Any:
-    """Each float32 leaf in `dtype`: unchanged for float32, stochastically rounded for bfloat16."""
+def _store(mu: Any, nu: Any, dtype: jnp.dtype, key: jax.Array) -> tuple[Any, Any]:
+    """Both moments in `dtype`: unchanged for float32, stochastically rounded for bfloat16. One
+    32-bit draw per element serves both (its upper half rounds mu, its lower half nu): the random
+    bits cost as much as the rest of the update on a CPU."""
     if dtype == jnp.float32:
-        return tree
-    leaves, treedef = jax.tree.flatten(tree)
-    keys = jax.random.split(key, max(len(leaves), 1))
-    return jax.tree.unflatten(treedef, [round_to_bfloat16(x, k) for x, k in zip(leaves, keys)])
+        return mu, nu
+    mus, treedef = jax.tree.flatten(mu)
+    nus = treedef.flatten_up_to(nu)
+    keys = jax.random.split(key, max(len(mus), 1))
+    pairs = []
+    for m, v, k in zip(mus, nus, keys):
+        bits = jax.random.bits(k, m.shape, jnp.uint32)
+        pairs.append((round_to_bfloat16(m, bits >> 16), round_to_bfloat16(v, bits & jnp.uint32(0xFFFF))))
+    return (jax.tree.unflatten(treedef, [m for m, _ in pairs]), jax.tree.unflatten(treedef, [v for _, v in pairs]))
 
 
 def scale_by_adam_stored_in(moments_dtype: str, b1: float, b2: float, eps: float,
@@ -72,8 +78,7 @@ def scale_by_adam_stored_in(moments_dtype: str, b1: float, b2: float, eps: float
         nu_scale = 1 / (1 - b2 ** count.astype(jnp.float32))
         scaled = jax.tree.map(lambda g, m, v: (m * mu_scale / (jnp.sqrt(v * nu_scale) + eps)).astype(g.dtype),
                               updates, mu, nu)
-        mu_key, nu_key = jax.random.split(jax.random.fold_in(base_key, count))
-        return scaled, optax.ScaleByAdamState(count=count, mu=_store(mu, dtype, mu_key),
-                                              nu=_store(nu, dtype, nu_key))
+        mu, nu = _store(mu, nu, dtype, jax.random.fold_in(base_key, count))
+        return scaled, optax.ScaleByAdamState(count=count, mu=mu, nu=nu)
 
     return optax.GradientTransformation(init, update)
