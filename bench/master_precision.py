@@ -4,7 +4,8 @@ order, 40 steps) under each precision setting, in one call, read from each run's
     python3 bench/master_precision.py --data SHARDS --out OUT [--preset qwen3_vl_2b] [--set remat=minimal]
 
 Settings (bench/train_memory.py SETTINGS): fp32 master and moments (the reference), fp32 master
-with bf16 moments (`moments_dtype=bfloat16`), bf16 master. Prints each one's loss every
+with bf16 moments (`moments_dtype=bfloat16`), bf16 master, and bf16 master with stochastic rounding
+of weights and moments (`stochastic_rounding=true`). Prints each one's loss every
 --log-every steps, its loss at the last step as a ratio to the reference's (issue 51's bar: within
 5 % at step 40), the mean over the last 10 logged losses (one step's loss is one batch's), and the
 median tokens/s. The runs share the data order, so the curves differ only by the setting.

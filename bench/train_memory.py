@@ -6,7 +6,8 @@ bench/train_step.py reports the real peak to hold these against.
     python3 bench/train_memory.py --preset qwen3_vl_4b [--set grad_accum=4 ...]
 
 One row per setting: fp32 master with fp32 moments (the default), fp32 master with bf16 moments
-(`moments_dtype=bfloat16`), and bf16 master (`master_fp32=false`). Gradients are counted as the
+(`moments_dtype=bfloat16`), bf16 master (`master_fp32=false`), and bf16 master rounded
+stochastically with stochastically rounded bf16 moments (the same bytes as bf16 master). Gradients are counted as the
 step holds them (train/step.py): one tree in the trainable weights' dtype, plus a float32
 accumulation buffer when grad_accum > 1.
 """
@@ -25,6 +26,7 @@ SETTINGS = {  # name -> TrainConfig overrides
     "fp32_master_fp32_moments": ("master_fp32=true",),
     "fp32_master_bf16_moments": ("master_fp32=true", "moments_dtype=bfloat16"),
     "bf16_master": ("master_fp32=false",),
+    "bf16_master_stochastic": ("master_fp32=false", "moments_dtype=bfloat16", "stochastic_rounding=true"),
 }
 GB = 1e9
 

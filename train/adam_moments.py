@@ -3,9 +3,10 @@
 fp32 master weights with fp32 moments of the 4B config (vision frozen: 16.1 GB of weights,
 32.2 GB of moments, 16.1 GB of gradients, bench/train_memory.py) leave too little of one 80 GB
 card for activations; bf16 weights do not learn (an lr-1e-5 update is below bf16's resolution).
-Keeping the weights in fp32 and only the moments in bf16 halves the moments. optax's ``scale_by_adam`` narrows the first moment only (``mu_dtype``), so this keeps
-both in the chosen dtype, reads them back to float32 for the update, and stores them with
-stochastic rounding.
+Keeping the weights in fp32 and only the moments in bf16 halves the moments. optax's
+``scale_by_adam`` narrows the first moment only (``mu_dtype``), so this keeps both in the chosen
+dtype, reads them back to float32 for the update, and stores them with stochastic rounding
+(train/stochastic_rounding.py).
 
 Why stochastic: with b2 = 0.999 the second moment changes by 0.1 % a step, less than half a
 bf16 step (0.2-0.4 %), so round-to-nearest drops the change. A toy run of the EMA over 2,000
@@ -23,17 +24,9 @@ import jax
 import jax.numpy as jnp
 import optax
 
+from train.stochastic_rounding import round_to_bfloat16
+
 MOMENT_DTYPES = ("float32", "bfloat16")
-
-
-def round_to_bfloat16(x: jax.Array, noise: jax.Array) -> jax.Array:
-    """float32 -> bfloat16, rounding the magnitude up with probability equal to the dropped fraction.
-
-    A bfloat16 is the upper 16 bits of a float32: adding `noise` (uniform in [0, 2^16), uint32)
-    to the 16 bits below them and truncating rounds up exactly that often (inf and nan stay)."""
-    bits = jax.lax.bitcast_convert_type(x.astype(jnp.float32), jnp.uint32)
-    truncated = (bits + noise) & jnp.uint32(0xFFFF0000)
-    return jax.lax.bitcast_convert_type(truncated, jnp.float32).astype(jnp.bfloat16)
 
 
 def _store(mu: Any, nu: Any, dtype: jnp.dtype, key: jax.Array) -> tuple[Any, Any]:

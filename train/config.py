@@ -98,6 +98,10 @@ class TrainConfig:
     # bf16 (stochastically rounded, update math in float32) under fp32 master weights: the 4B's
     # moments take 16.1 GB instead of 32.2 (train/adam_moments.py, bench/train_memory.py).
     moments_dtype: str = ""
+    # bf16 master weights (master_fp32=false, compute_dtype=bfloat16) rounded stochastically after
+    # each update, so updates below half a bf16 step still move them on average
+    # (train/stochastic_rounding.py); pair with moments_dtype=bfloat16 for float32 Adam arithmetic.
+    stochastic_rounding: bool = False
     attention: str = "auto"  # auto: cuDNN fused attention on GPU, XLA elsewhere; or cudnn / xla
     # Decoder-layer rematerialisation policy (jax3dc/model/layer_stack.py): full recomputes each
     # layer in the backward pass, minimal keeps its matmul outputs, qkv its q/k/v projections, none
@@ -243,6 +247,9 @@ def validate(cfg: TrainConfig) -> None:
     if cfg.moments_dtype not in ("", *MOMENT_DTYPES):
         raise ConfigError(f"moments_dtype {cfg.moments_dtype!r}: expected empty (the weights' dtype) or one of "
                           f"{', '.join(MOMENT_DTYPES)}")
+    if cfg.stochastic_rounding and (cfg.master_fp32 or cfg.compute_dtype != "bfloat16"):
+        raise ConfigError("stochastic_rounding rounds bf16 master weights: it needs master_fp32=false and "
+                          f"compute_dtype=bfloat16 (got master_fp32={cfg.master_fp32}, compute_dtype={cfg.compute_dtype})")
     if cfg.compute_dtype not in ("bfloat16", "float32", "float16"):
         raise ConfigError(f"compute_dtype {cfg.compute_dtype!r}: expected bfloat16, float32 or float16")
     for name in ("steps", "seq_len", "log_every", "eval_every", "save_every", "keep_last"):
