@@ -13,7 +13,8 @@ bf16 step (0.2-0.4 %), so round-to-nearest drops the change. A toy run of the EM
 steps whose gradient scale falls tenfold halfway ended at 0.25 (constant g^2) and 0.59 (noisy)
 where float32 reached 0.30: nu stops following the gradients. Stochastic rounding keeps the
 stored moment unbiased, so it follows them on average (tests/train/test_adam_moments.py).
-The rounding noise is drawn from the step count, so a resumed run draws the same bits.
+The rounding noise is drawn from the step count, so a resumed run draws the same bits, and with
+jax's partitionable threefry (the default) the bits do not depend on the mesh either.
 """
 
 from __future__ import annotations
