@@ -15,6 +15,7 @@ sheet's 989.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
@@ -70,18 +71,26 @@ def run_peer(peer: str, seq: int, out_dir: str) -> dict:
         return json.load(f)
 
 
-def main() -> None:
-    ap = bench_parser(__doc__)
+def add_run_options(ap: argparse.ArgumentParser, preset: str | None = None, log_every: int = 10,
+                    save_every: int = 20) -> None:
+    """The options `run_train` reads: the run's data, shape, length, cadence and extra settings."""
     ap.add_argument("--data", required=True, help="shards from `jax3dc data build/import`")
     add_preset(ap)
+    if preset:
+        ap.set_defaults(preset=preset)
     add_seq(ap, 4096)
     add_batch(ap, 4)
     ap.add_argument("--accum", type=int, default=4, help="micro-batches per step")
     ap.add_argument("--steps", type=int, default=40)
-    ap.add_argument("--log-every", type=int, default=10)
-    ap.add_argument("--save-every", type=int, default=20)
+    ap.add_argument("--log-every", type=int, default=log_every)
+    ap.add_argument("--save-every", type=int, default=save_every)
     ap.add_argument("--loader-workers", type=int, default=8)
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="more train settings")
+
+
+def main() -> None:
+    ap = bench_parser(__doc__)
+    add_run_options(ap)
     ap.add_argument("--peer", help="hf_peer.py: run it after, in the same call")
     ap.add_argument("--out", required=True, help="folder for the run and the figures")
     add_json_lines(ap)

@@ -10,6 +10,16 @@ LoRA on one smaller GPU (issue 35's target: peak <= 24 GiB at 4,096 tokens): ada
 on every decoder projection, fp32 adapters and moments, frozen base in bf16:
 
     python3 bench/train_step.py --preset qwen3_vl_4b --seq 4096 --batch 1 --remat full --lora-rank 16 --master-fp32
+
+fp32-quality full training on one 80 GB card (issue 51): fp32 master weights, Adam's moments in
+bf16 (bench/train_memory.py counts 49.1 GB of weights, gradients and moments before activations;
+on an H200, XLA_PYTHON_CLIENT_MEM_FRACTION=0.55 caps the pool at ~77 GB to hold it to an 80 GB card):
+
+    python3 bench/train_step.py --preset qwen3_vl_4b --seq 4096 --batch 1 --remat full --master-fp32 --moments-dtype bfloat16
+
+The other option of issue 51, bf16 master weights and moments both rounded stochastically:
+
+    python3 bench/train_step.py --preset qwen3_vl_4b --seq 4096 --batch 1 --remat full --moments-dtype bfloat16 --stochastic-rounding
 """
 
 import argparse
@@ -38,6 +48,10 @@ def main() -> None:
     add_image(ap)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--master-fp32", action="store_true", help="fp32 master weights (more memory)")
+    ap.add_argument("--moments-dtype", default="", choices=("", "float32", "bfloat16"),
+                    help="Adam's moments' dtype (TrainConfig.moments_dtype; empty: the master weights')")
+    ap.add_argument("--stochastic-rounding", action="store_true",
+                    help="bf16 master weights rounded stochastically after each update (without --master-fp32)")
     ap.add_argument("--lora-rank", type=int, default=0, help="> 0: train LoRA adapters of this rank only")
     ap.add_argument("--attention", default=None, help="jax.nn.dot_product_attention implementation, e.g. cudnn")
     ap.add_argument("--mesh", default="1,-1,1", help="data,fsdp,tensor over all visible devices (-1: the rest)")
@@ -57,7 +71,7 @@ def main() -> None:
 
     cfg = TrainConfig(init=a.preset, data="synthetic", seq_len=a.seq, batch_size=a.batch, grad_accum=1, steps=a.steps + 2,
                       warmup_steps=1, image_size=a.image, remat=a.remat, scan_layers=a.scan, master_fp32=a.master_fp32,
-                      lora_rank=a.lora_rank,
+                      moments_dtype=a.moments_dtype, stochastic_rounding=a.stochastic_rounding, lora_rank=a.lora_rank,
                       mesh=MeshConfig(*(int(x) for x in a.mesh.split(","))))
     trainer = Trainer(cfg, attention_impl=a.attention)
     loader = make_loader(cfg, trainer.model.config, "train", padding=False)
@@ -77,7 +91,8 @@ def main() -> None:
     flops = trainer.flops_model().step_flops(a.batch, a.seq) / dt
     dev = jax.devices()[0]
     print(f"device: {dev.device_kind} x{jax.device_count()}  preset {a.preset} batch {a.batch} x {a.seq} "
-          f"remat {a.remat} lora_rank {a.lora_rank}")
+          f"remat {a.remat} lora_rank {a.lora_rank} master_fp32 {a.master_fp32} moments_dtype {a.moments_dtype or 'master'} "
+          f"stochastic_rounding {a.stochastic_rounding}")
     print(f"step_s: {dt:.4f}  tokens_per_s: {a.batch * a.seq / dt:.0f}  tflops: {flops / 1e12:.1f}  loss: {loss:.4f}")
     peak = peak_flops(dev.device_kind)
     if peak:
@@ -92,7 +107,9 @@ def main() -> None:
         summarise(a.profile, top=20)
     if a.json:
         row = {"device": dev.device_kind, "devices": jax.device_count(), "mesh": dict(trainer.mesh.shape),
-               "preset": a.preset, "batch": a.batch, "seq": a.seq, "remat": a.remat, "scan": a.scan, "lora_rank": a.lora_rank, "step_s": dt,
+               "preset": a.preset, "batch": a.batch, "seq": a.seq, "remat": a.remat, "scan": a.scan, "lora_rank": a.lora_rank,
+               "master_fp32": a.master_fp32, "moments_dtype": a.moments_dtype,
+               "stochastic_rounding": a.stochastic_rounding, "step_s": dt,
                "tokens_per_s": a.batch * a.seq / dt, "tokens_per_s_per_device": a.batch * a.seq / dt / jax.device_count(),
                "mfu_vs_989": flops / 989e12 / jax.device_count(), "peak_mem_gib": max(peaks),
                "setup_and_compile_s": compiled - started, "compile": compile_cost,

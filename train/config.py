@@ -10,16 +10,14 @@ import dataclasses
 import json
 import typing
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import Any, Sequence
 
 from jax3dc import sharding
 from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR
 from jax3dc.errors import Jax3dcError
 from jax3dc.model.layer_stack import REMAT_POLICIES
 from jax3dc.model.lora import LoraSpec
-
-if TYPE_CHECKING:
-    from jax3dc.model.lora import LoraSpec
+from train.adam_moments import MOMENT_DTYPES
 
 
 class ConfigError(Jax3dcError):
@@ -94,6 +92,14 @@ class TrainConfig:
     # state in float32 (else in the compute dtype, half the memory).
     compute_dtype: str = "bfloat16"
     master_fp32: bool = True
+    # Adam's two moments: "" keeps them in the trainable weights' dtype; "bfloat16" stores both in
+    # bf16 (stochastically rounded, update math in float32) under fp32 master weights: the 4B's
+    # moments take 16.1 GB instead of 32.2 (train/adam_moments.py, bench/train_memory.py).
+    moments_dtype: str = ""
+    # bf16 master weights (master_fp32=false, compute_dtype=bfloat16) rounded stochastically after
+    # each update, so updates below half a bf16 step still move them on average
+    # (train/stochastic_rounding.py); pair with moments_dtype=bfloat16 for float32 Adam arithmetic.
+    stochastic_rounding: bool = False
     attention: str = "auto"  # auto: cuDNN fused attention on GPU, XLA elsewhere; or cudnn / xla
     # Decoder-layer rematerialisation policy (jax3dc/model/layer_stack.py): full recomputes each
     # layer in the backward pass, minimal keeps its matmul outputs, qkv its q/k/v projections, none
@@ -234,6 +240,12 @@ def validate(cfg: TrainConfig) -> None:
         raise ConfigError(f"lora_rank must be >= 0 (0: no LoRA), got {cfg.lora_rank}")
     if cfg.lora_rank:
         lora_spec(cfg)
+    if cfg.moments_dtype not in ("", *MOMENT_DTYPES):
+        raise ConfigError(f"moments_dtype {cfg.moments_dtype!r}: expected empty (the weights' dtype) or one of "
+                          f"{', '.join(MOMENT_DTYPES)}")
+    if cfg.stochastic_rounding and (cfg.master_fp32 or cfg.compute_dtype != "bfloat16"):
+        raise ConfigError("stochastic_rounding rounds bf16 master weights: it needs master_fp32=false and "
+                          f"compute_dtype=bfloat16 (got master_fp32={cfg.master_fp32}, compute_dtype={cfg.compute_dtype})")
     if cfg.compute_dtype not in ("bfloat16", "float32", "float16"):
         raise ConfigError(f"compute_dtype {cfg.compute_dtype!r}: expected bfloat16, float32 or float16")
     for name in ("steps", "seq_len", "log_every", "eval_every", "save_every", "keep_last"):

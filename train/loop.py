@@ -103,7 +103,8 @@ class Trainer:
             compute, _ = model_state.dtypes(self.cfg)
             self._train_step = make_train_step(
                 self.model.graphdef, model_state.score, self.tx, self.schedule, compute, self.mesh,
-                self.state_sharding, self.model.frozen_sharding, self._batch_shardings(g))
+                self.state_sharding, self.model.frozen_sharding, self._batch_shardings(g),
+                stochastic_rounding=self.cfg.stochastic_rounding)
         # the mesh activates the model's activation constraints; the rules reach them and the loss
         with jax.set_mesh(self.mesh), sharding.use_rules(self.rules):
             self.state, metrics = self._train_step(self.state, self.model.frozen, g)

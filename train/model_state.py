@@ -95,6 +95,12 @@ def _place_adapters(model: Qwen3VL, shardings: Any) -> None:
     nnx.update(model, jax.tree.map(place, nnx.state(model, nnx.LoRAParam), shardings))
 
 
+def abstract_model(cfg: TrainConfig, mcfg: Qwen3VLConfig, attention_impl: str | None = None) -> Qwen3VL:
+    """The model `create` builds (adapters included) as shapes and dtypes, nothing allocated:
+    for placing it, and for counting its bytes (bench/train_memory.py)."""
+    return nnx.eval_shape(lambda: _with_lora(cfg, _constructor(cfg, mcfg, attention_impl)()))
+
+
 def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, tokenizer=None) -> ModelState:
     """Build the model on the mesh: random weights for a preset (sized to `tokenizer` when one
     is given), else the HF checkpoint's; with LoRA, fresh adapters on it (B = 0: the model's
@@ -105,7 +111,7 @@ def create(cfg: TrainConfig, mesh: Mesh, attention_impl: str | None = None, toke
     compute, _ = dtypes(cfg)
     build = _constructor(cfg, mcfg, attention_impl)
     is_trainable = trainable_filter(cfg.freeze, adapters_only=cfg.lora_rank > 0)
-    abstract = nnx.eval_shape(lambda: _with_lora(cfg, build()))
+    abstract = abstract_model(cfg, mcfg, attention_impl)
     graphdef, abs_train, abs_frozen = nnx.split(abstract, is_trainable, ...)
     rules = sharding_rules(cfg)
     train_sh, frozen_sh = state_shardings(abs_train, mesh, rules), state_shardings(abs_frozen, mesh, rules)

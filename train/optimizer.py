@@ -13,6 +13,7 @@ import jax
 import optax
 from flax import nnx
 
+from train.adam_moments import scale_by_adam_stored_in
 from train.config import TrainConfig
 
 
@@ -28,12 +29,22 @@ def _decays(params):
     return jax.tree.map(lambda p: p.ndim >= 2, params)
 
 
+def _scale_by_adam(cfg: TrainConfig) -> optax.GradientTransformation:
+    """optax's Adam scaling (moments in the trainable parameters' dtype), or with `moments_dtype`
+    both moments stored in that dtype (train/adam_moments.py)."""
+    if not cfg.moments_dtype:
+        return optax.scale_by_adam(b1=cfg.b1, b2=cfg.b2, eps=cfg.eps)
+    return scale_by_adam_stored_in(cfg.moments_dtype, cfg.b1, cfg.b2, cfg.eps, seed=cfg.seed)
+
+
 def build_optimizer(cfg: TrainConfig) -> optax.GradientTransformation:
-    """Clip the global norm, then AdamW; moments live in the trainable parameters' dtype."""
+    """Clip the global norm, then AdamW. The AdamW part is optax.adamw's own chain (Adam scaling,
+    decoupled weight decay, learning rate) with the Adam scaling chosen by `_scale_by_adam`, so the
+    optimiser state keeps optax.adamw's layout and older checkpoints still restore."""
     return optax.chain(
         optax.clip_by_global_norm(cfg.clip_norm),
-        optax.adamw(learning_rate(cfg), b1=cfg.b1, b2=cfg.b2, eps=cfg.eps,
-                    weight_decay=cfg.weight_decay, mask=_decays))
+        optax.chain(_scale_by_adam(cfg), optax.add_decayed_weights(cfg.weight_decay, _decays),
+                    optax.scale_by_learning_rate(learning_rate(cfg))))
 
 
 def path_name(path: Sequence) -> str:

@@ -18,6 +18,8 @@ import optax
 from flax import nnx
 from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 
+from train.stochastic_rounding import apply_updates_rounded
+
 
 # score(model, micro_batch) -> (sum of masked token NLL, number of correct argmax predictions)
 Score = Callable[[nnx.Module, dict[str, jax.Array]], tuple[jax.Array, jax.Array]]
@@ -45,8 +47,11 @@ def _micro_shardings(batch_sharding: dict[str, NamedSharding]) -> dict[str, Name
 
 def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTransformation,
                     schedule: optax.Schedule, compute_dtype: jnp.dtype, mesh: Mesh,
-                    state_sharding: Any, frozen_sharding: Any, batch_sharding: Any) -> Callable:
-    """jit(step)(state, frozen, batch) -> (state, metrics). `batch` arrays are [accum, rows, ...]."""
+                    state_sharding: Any, frozen_sharding: Any, batch_sharding: Any,
+                    stochastic_rounding: bool = False) -> Callable:
+    """jit(step)(state, frozen, batch) -> (state, metrics). `batch` arrays are [accum, rows, ...].
+    With `stochastic_rounding`, bf16 weights take their updates rounded stochastically, with a
+    key split from the state's RNG (train/stochastic_rounding.py)."""
     micro_spec = _micro_shardings(batch_sharding)
 
     def loss_sum(params, frozen, micro, n_scored):
@@ -76,8 +81,11 @@ def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTran
         grad_norm = optax.tree.norm(grads)
         grads = jax.tree.map(lambda g, p: g.astype(p.dtype), grads, state.params)
         updates, opt_state = tx.update(grads, state.opt_state, state.params)
-        params = optax.apply_updates(state.params, updates)
-        rng, _ = jax.random.split(state.rng)
+        rng, round_key = jax.random.split(state.rng)
+        if stochastic_rounding:
+            params = apply_updates_rounded(state.params, updates, round_key)
+        else:
+            params = optax.apply_updates(state.params, updates)
         metrics = {"loss": nll / n_scored, "accuracy": correct / n_scored, "grad_norm": grad_norm,
                    "lr": schedule(state.step), "scored_tokens": n_scored}
         new = TrainState(step=state.step + 1, params=params, opt_state=opt_state, rng=rng)
