@@ -19,8 +19,16 @@ import os
 import sys
 from typing import Any
 
+import jax
+import jax.numpy as jnp
+import numpy as np
+from flax import nnx
+
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from bench.options import add_json_lines, add_preset, append_json_lines, bench_parser  # noqa: E402
+from train.config import TrainConfig, apply_overrides  # noqa: E402
+from train.model_state import abstract_model, dtypes, model_config  # noqa: E402
+from train.optimizer import build_optimizer, trainable_filter  # noqa: E402
 
 SETTINGS = {  # name -> TrainConfig overrides
     "fp32_master_fp32_moments": ("master_fp32=true",),
@@ -32,22 +40,12 @@ GB = 1e9
 
 
 def _bytes(tree: Any) -> int:
-    import jax
-    import numpy as np
-
     return int(sum(int(np.prod(x.shape)) * x.dtype.itemsize for x in jax.tree.leaves(tree)))
 
 
 def state_bytes(cfg) -> dict[str, int]:
     """Bytes of trainable weights, frozen weights (held in the compute dtype), gradients and
     optimiser state of a run of `cfg`, and their total."""
-    import jax
-    import jax.numpy as jnp
-    from flax import nnx
-
-    from train.model_state import abstract_model, dtypes, model_config
-    from train.optimizer import build_optimizer, trainable_filter
-
     compute, _ = dtypes(cfg)
     model = abstract_model(cfg, model_config(cfg.init))
     _, trainable, frozen = nnx.split(model, trainable_filter(cfg.freeze, adapters_only=cfg.lora_rank > 0), ...)
@@ -65,8 +63,6 @@ def main() -> None:
     ap.add_argument("--set", action="append", default=[], help="TrainConfig override key=value (as jax3dc train)")
     add_json_lines(ap)
     a = ap.parse_args()
-    from train.config import TrainConfig, apply_overrides
-
     base = apply_overrides(TrainConfig(init=a.preset, grad_accum=1, batch_size=1), a.set)
     rows = []
     print(f"preset {a.preset}, grad_accum {base.grad_accum}, GB = 1e9 bytes (activations not counted)")
