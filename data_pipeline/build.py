@@ -111,7 +111,6 @@ def plan_shards(sources: list[SourceSpec], objects_per_shard: int, split: str = 
 def load_source(spec: SourceSpec) -> SourceObject:
     if spec.kind == "factory":
         return factory_source(spec.category, spec.seed)
-
     obj = import_object(Path(spec.path))
     return SourceObject(str(obj.meta.get("category", "imported")), spec.object_id, obj.structure, obj.parts,
                         float(obj.meta.get("scale", 1.0)), warnings=tuple(obj.meta.get("warnings", ())))
@@ -139,23 +138,27 @@ def config_doc(config: BuildConfig) -> dict:
 
 
 def spec_records(spec: SourceSpec, split: str, config: BuildConfig):
-    """The records of one source: its views and, with ``config.augment``, its split and merge variants."""
+    """The records of one source: its views, with ``config.mirror`` every view of its mirror image,
+    and with ``config.augment`` its split and merge variants (one view each)."""
     objects = load_sources(spec)
     for warning in objects[0].warnings:  # printed by the worker that built the object: once per build
         tqdm.write(f"warning: {spec.object_id}: {warning}", file=sys.stderr)
+
+    def records(obj: SourceObject, views: int):
+        return object_records(obj, views, config.seed, config.size, split=split, appearance=config.appearance,
+                              palette_per_view=config.palette_per_view)
+
     for obj in objects:
-        yield from object_records(obj, config.views, config.seed, config.size, split=split,
-                                  appearance=config.appearance, palette_per_view=config.palette_per_view)
-    if config.mirror and spec.kind != "scene":
-        yield from object_records(mirrored(objects[0]), config.views, config.seed, config.size, split=split,
-                                  appearance=config.appearance, palette_per_view=config.palette_per_view)
-    if config.augment and spec.kind != "scene":
-        obj = objects[0]
-        rng = derived_rng(config.seed, "augment", obj.object_id)
-        for variant in (split_part(obj, rng), merge_parts(obj, rng)):
+        yield from records(obj, config.views)
+    if spec.kind == "scene":
+        return
+    if config.mirror:
+        yield from records(mirrored(objects[0]), config.views)
+    if config.augment:
+        rng = derived_rng(config.seed, "augment", objects[0].object_id)
+        for variant in (split_part(objects[0], rng), merge_parts(objects[0], rng)):
             if variant is not None:
-                yield from object_records(variant, 1, config.seed, config.size, split=split,
-                                          appearance=config.appearance, palette_per_view=config.palette_per_view)
+                yield from records(variant, 1)
 
 
 def error_line(error: BaseException) -> str:

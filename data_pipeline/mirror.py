@@ -33,7 +33,8 @@ def _mirrored_joint(j: Joint) -> Joint:
 
 
 def mirrored(obj: SourceObject) -> SourceObject:
-    """``obj`` reflected across its x = 0 plane; relations are found again when its records are made."""
+    """``obj`` reflected across its x = 0 plane; its symmetric and instance relations are found
+    again from the mirrored parts when its records are made (``object_records``)."""
     transform = np.eye(4)
     transform[:3, :3] = _M
     parts = {}
@@ -42,6 +43,4 @@ def mirrored(obj: SourceObject) -> SourceObject:
         parts[pid].apply_transform(transform)
     nodes = {pid: replace(node, joint=None if node.joint is None else _mirrored_joint(node.joint))
              for pid, node in obj.structure.nodes.items()}
-    structure = replace(obj.structure, nodes=nodes,
-                        relations=tuple(r for r in obj.structure.relations if r.type not in ("symmetric", "instance")))
-    return replace(obj, structure=structure, parts=parts, program=None, parameters=None, augmentation=AUGMENTATION)
+    return replace(obj, structure=replace(obj.structure, nodes=nodes), parts=parts, program=None, parameters=None, augmentation=AUGMENTATION)

@@ -88,8 +88,8 @@ def _source_object(record: Record, sources: Mapping[str, Path]) -> SourceObject:
 
 
 def _augmented(source: SourceObject, record: Record) -> SourceObject:
-    """The mirror image, or the split or merge variant the build made, replayed with the build's generator (both are
-    drawn from it in that order, as in ``data_pipeline.build.spec_records``)."""
+    """The mirror image, or the split or merge variant the build made, replayed with the build's
+    generator (both are drawn from it in that order, as in ``data_pipeline.build.spec_records``)."""
     if record.meta["augmentation"] == MIRROR:
         return mirrored(source)
     rng = derived_rng(record.meta["seed"], "augment", source.object_id)
