@@ -24,7 +24,6 @@ import json
 import multiprocessing as mp
 import os
 import sys
-import threading
 import time
 import warnings
 from concurrent.futures import ProcessPoolExecutor
@@ -40,11 +39,10 @@ from jax3dc.export.simulation import collision_pieces  # noqa: E402
 from jax3dc.factories import FACTORIES  # noqa: E402
 from jax3dc.geometry.parts import part_boxes  # noqa: E402
 from jax3dc.physics.candidate_verdicts import candidate_verdicts, start_shapes  # noqa: E402
-from jax3dc.physics.mjx_service import DeviceService, init_worker  # noqa: E402
+from jax3dc.physics.mjx_service import serve_workers  # noqa: E402
 from jax3dc.structure import to_json  # noqa: E402
-from jax3dc.verify.repair import repair  # noqa: E402
-from jax3dc.verify.select import choose, parse_candidate  # noqa: E402
-from jax3dc.verify.verdicts import Physics, VerdictCache  # noqa: E402
+from jax3dc.verify.select import parse_candidate  # noqa: E402
+from jax3dc.verify.verified import ObjectParts, verify_object  # noqa: E402
 
 
 @dataclass(frozen=True)
@@ -59,13 +57,11 @@ def _verify(job: _Job, backend: str, threads: int) -> dict:
     """One object's choice and repair; what the comparison needs of it."""
     warnings.filterwarnings("ignore")
     obj = job.obj
-    boxes = part_boxes(obj.parts)
     start = time.perf_counter()
-    check = VerdictCache(Physics(obj.parts, obj.scale, obj.mounted, backend, threads=threads))
-    choice = choose(job.candidates, boxes.keys(), obj.parts, obj.scale, obj.mounted, boxes, check=check)
-    final = choice.structure
-    if job.repair and final is not None and not choice.rows[choice.index].ok:
-        final = repair(final, obj.parts, obj.scale, obj.mounted, boxes, check=check).structure
+    done = verify_object(job.name, job.candidates, ObjectParts(obj.parts, obj.scale, obj.mounted, part_boxes(obj.parts)),
+                         job.repair, backend, threads=threads)
+    choice = done.choice
+    final = done.repaired.structure if done.repaired is not None else choice.structure
     return {"name": job.name, "winner": choice.index, "final": None if final is None else to_json(final),
             "lines": [r.verdict.to_json()["joints"] if r.parsed else r.rule for r in choice.rows],
             "seconds": time.perf_counter() - start}
@@ -99,13 +95,7 @@ def _run(jobs: list[_Job], backend: str, workers: int, context) -> tuple[list[di
         device = None
         kwargs = {}
         if backend == "mjx":
-            device = DeviceService(context, workers, batch_objects=16, start_shapes=start_shapes())
-            stop = threading.Event()
-            server = threading.Thread(target=device.serve, args=(stop,), daemon=True)
-            server.start()
-            stack.callback(server.join)
-            stack.callback(stop.set)
-            kwargs = dict(initializer=init_worker, initargs=device.worker_args())
+            device, kwargs = serve_workers(stack, context, workers, batch_objects=16, start_shapes=start_shapes())
         start = time.perf_counter()
         pool = stack.enter_context(ProcessPoolExecutor(workers, mp_context=context, **kwargs))
         results = list(pool.map(run, jobs))

@@ -1,4 +1,4 @@
-"""The "no object found" check of ``predict`` (jax3dc.predict.image_check) against real data: it must
+"""The "no object found" check of ``predict`` (jax3dc.predict.stage1.check_object_image) against real data: it must
 accept every render and refuse blank and noise images.
 
 Run: python3 -m bench.image_check --data DIR [DIR ...]
@@ -21,7 +21,7 @@ from PIL import Image
 
 from data_pipeline.shards import read_dataset
 from jax3dc.errors import InputFileError
-from jax3dc.predict.image_check import MIN_COVERAGE, MIN_SMOOTH, check_object_image, foreground_coverage, smooth_share
+from jax3dc.predict.stage1 import MIN_COVERAGE, MIN_SMOOTH, check_object_image, foreground_coverage, smooth_share
 
 SIZES = (32, 64, 224, 640)
 

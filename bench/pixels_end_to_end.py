@@ -34,7 +34,7 @@ from eval.metrics.tables import format_tables
 from eval.pixels import predict_record, score_pixels
 from eval.records import read_records, reference_of
 from jax3dc.predict.pipeline import Checkpoints
-from jax3dc.predict.stage1_readers import ReaderSettings, load_reader
+from jax3dc.predict.stage1 import ReaderSettings, load_reader
 from jax3dc.release import default_stage1_model
 
 

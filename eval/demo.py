@@ -49,7 +49,7 @@ from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.parameters import parse_parameters
 from jax3dc.predict.pipeline import Checkpoints, predict
 from jax3dc.predict.segmentation import camera_from_dict
-from jax3dc.predict.stage1_readers import ReaderSettings, load_reader
+from jax3dc.predict.stage1 import ReaderSettings, load_reader
 from jax3dc.release import default_stage1_model, default_structure_model
 from jax3dc.structure import canonicalize, save_boxes, to_dict, to_json
 from train import cli as train_cli

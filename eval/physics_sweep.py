@@ -12,7 +12,6 @@ import functools
 import json
 import multiprocessing as mp
 import os
-import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -30,7 +29,7 @@ from jax3dc.errors import Jax3dcError
 from jax3dc.export.simulation import collision_pieces
 from jax3dc.physics.cli import VERDICT_HELP
 from jax3dc.physics.cpu_backend import final_qpos
-from jax3dc.physics.mjx_service import DeviceService, client, init_worker
+from jax3dc.physics.mjx_service import client, serve_workers
 from jax3dc.physics.verdict import check_object_with_curves
 from jax3dc.program import run_program
 from jax3dc.structure import parse_structure
@@ -92,14 +91,8 @@ def run_sweep(args: argparse.Namespace) -> int:
         context = mp.get_context("spawn")  # spawned: a forked child would inherit the loader's threads and locks
         if args.backend == "mjx":
             use_compile_cache(args.compile_cache)
-            device = DeviceService(context, args.workers)
-            stop = threading.Event()
-            server = threading.Thread(target=device.serve, args=(stop,), daemon=True)
-            server.start()
-            stack.callback(server.join)
-            stack.callback(stop.set)
-            pool = stack.enter_context(ProcessPoolExecutor(args.workers, mp_context=context, initializer=init_worker,
-                                                           initargs=device.worker_args()))
+            device, service = serve_workers(stack, context, args.workers)
+            pool = stack.enter_context(ProcessPoolExecutor(args.workers, mp_context=context, **service))
             done = pool.map(_check_job, jobs)
         elif args.workers > 1:
             pool = stack.enter_context(ProcessPoolExecutor(args.workers, mp_context=context))

@@ -28,7 +28,7 @@ from jax3dc.errors import Jax3dcError
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.predict.pipeline import Checkpoints, predict
-from jax3dc.predict.stage1_readers import Reader
+from jax3dc.predict.stage1 import Reader
 from jax3dc.release import default_structure_model
 from jax3dc.structure import to_dict
 

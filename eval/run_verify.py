@@ -1,5 +1,7 @@
 """The verification stage of ``jax3dc eval run``: candidates chosen by the physics verdict, the
 winner repaired, one line per object in ``verified.jsonl`` (resumable like predictions.jsonl).
+The objects are verified in the core's worker pool (``jax3dc.verify.pool``); each worker rebuilds
+its record's parts (``record_object``).
 
 A line says which candidate won and why, its verdict, and each repair (part, kind, joint before
 and after); its ``text`` is the structure that is scored: the repaired one where a repair was
@@ -12,17 +14,20 @@ import json
 import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
 
 from data_pipeline.record import Record
-from eval.run_verify_pool import Job, Verified, verify_many
+from data_pipeline.record_parts import record_parts
 from jax3dc.sampler import read_predictions_file
-from jax3dc.structure import to_json
+from jax3dc.structure import boxes_from_dict, to_json
+from jax3dc.verify.pool import Job, verify_many
 from jax3dc.verify.select import Candidate
+from jax3dc.verify.verified import ObjectParts, Verified
 
 
 @dataclass
@@ -49,6 +54,19 @@ def candidates_of(line: Mapping[str, Any]) -> tuple[Candidate, ...]:
     return tuple(Candidate(str(c["text"]), float(c.get("logprob", 0.0))) for c in items)
 
 
+def record_object(record: Record, sources: Mapping[str, Path]) -> ObjectParts:
+    """A record's object as verification needs it: its parts rebuilt (``sources``: object id ->
+    source folder, for imported records; see ``record_parts``) and its legend's boxes."""
+    parts, scale, mounted = record_parts(record, sources)
+    return ObjectParts(parts, scale, mounted, boxes_from_dict(record.meta["boxes"]))
+
+
+def record_jobs(records: Sequence[Record], lines: Mapping[str, Mapping[str, Any]], repair: bool) -> list[Job]:
+    """One job per record, its candidates from its predictions line; the records travel to the
+    workers without their images (they need only the text fields)."""
+    return [Job(r.key, candidates_of(lines[r.key]), replace(r, image_png=b"", seg_png=b""), repair) for r in records]
+
+
 def verified_line(result: Verified, candidates: Sequence[Candidate]) -> dict[str, Any]:
     choice, fixed = result.choice, result.repaired
     row = choice.rows[choice.index]
@@ -72,13 +90,14 @@ def verify_predictions(records: Sequence[Record], lines: Mapping[str, Mapping[st
     done = read_predictions_file(out_path)
     todo = [r for r in records if r.key not in done]
     stats = VerifyStats()
+    load = partial(record_object, sources=dict(sources or {}))
     chunk = chunk or max(1, 2 * workers)
     start = time.perf_counter()
     with out_path.open("a", encoding="utf-8") as f, tqdm(total=len(todo), desc="verifying", unit="obj") as bar:
         for lo in range(0, len(todo), chunk):
             batch = todo[lo:lo + chunk]
-            jobs = [Job(r, candidates_of(lines[r.key]), dict(sources or {}), repair) for r in batch]
-            for job, result in zip(jobs, verify_many(jobs, workers, backend)):
+            jobs = record_jobs(batch, lines, repair)
+            for job, result in zip(jobs, verify_many(jobs, load, workers, backend)):
                 line = verified_line(result, job.candidates)
                 f.write(json.dumps(line, separators=(",", ":")) + "\n")
                 done[line["key"]] = line

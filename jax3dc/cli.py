@@ -51,7 +51,17 @@ def _quiet_library_noise() -> None:
     logging.getLogger("trimesh").setLevel(logging.ERROR)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _entry_command(entry_name: str) -> str:
+    """The top-level command an entry point adds to: ``eval`` adds ``eval``; ``physics-sweep`` adds
+    a subcommand to the core's ``physics``."""
+    return entry_name.split("-", 1)[0]
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of ``argv``'s command: the core's commands and, of the packages above the core,
+    only the entry points that add to the command ``argv`` names, so that ``jax3dc predict`` loads
+    no evaluation, data or training code. Every entry point loads when ``argv`` names no command
+    or one nobody knows (the help and argparse's choices list them all)."""
     parser = _Parser(
         prog="jax3dc",
         description="One image in, a structured, articulated, simulation-ready 3D object out.",
@@ -59,13 +69,17 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in CORE_COMMANDS:
         module.register(sub)
-    for entry in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
+    entries = sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name)
+    argv = sys.argv[1:] if argv is None else argv
+    named = argv[0] if argv and not argv[0].startswith("-") else None  # the command comes first
+    wanted = [e for e in entries if _entry_command(e.name) == named]
+    for entry in wanted if wanted or named in sub.choices else entries:
         entry.load()(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

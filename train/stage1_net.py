@@ -21,7 +21,7 @@ import optax
 from flax import nnx
 
 from jax3dc.parameters import Count, Schema, parse_parameters
-from jax3dc.stage1_net.decode import normalised_number
+from jax3dc.stage1_net.folder import normalised_number
 from jax3dc.stage1_net.layout import OutputLayout
 from jax3dc.stage1_net.model import Stage1Net, forward
 

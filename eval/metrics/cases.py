@@ -20,7 +20,7 @@ from eval.limits import MAX_SCORED_PARTS
 from eval.metrics.score import Case
 from jax3dc.errors import InputFileError, StructureError
 from jax3dc.structure import Box, Structure, boxes_from_dict, canonicalize, parse_structure
-from jax3dc.structure.reply import json_text
+from jax3dc.structure.validate import json_text
 
 MISSING_RULE = "missing"
 

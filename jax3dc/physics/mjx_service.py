@@ -11,6 +11,7 @@ to the largest shapes met so far (``mjx_batch.Shapes``), so the sweep compiles o
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import queue
@@ -143,6 +144,20 @@ def init_worker(requests, replies, next_worker) -> None:
         worker = next_worker.value
         next_worker.value += 1
     _CLIENT = DeviceClient(worker, requests, replies[worker])
+
+
+def serve_workers(stack: contextlib.ExitStack, context, workers: int, **service) -> tuple[DeviceService, dict]:
+    """A DeviceService for ``workers`` processes of ``context``, served from a thread of this
+    process until ``stack`` closes, and the ``ProcessPoolExecutor`` arguments that connect each
+    worker to it; ``service``: DeviceService's settings. Enter the pool on ``stack`` after this
+    call, so that it closes first and the service outlives its last request."""
+    device = DeviceService(context, workers, **service)
+    stop = threading.Event()
+    server = threading.Thread(target=device.serve, args=(stop,), daemon=True)
+    server.start()
+    stack.callback(server.join)
+    stack.callback(stop.set)
+    return device, {"initializer": init_worker, "initargs": device.worker_args()}
 
 
 def installed_client() -> DeviceClient | None:

@@ -8,7 +8,7 @@ leaves every output made before it (and the report says what failed):
      program -> interpreter, a segmented mesh file, or a parts folder) -> parts/ (+ parameters.txt
      and program.txt for the parameters backend, program.txt for the code backend) and the
      stage-2 prompt -> prompt.txt; the backends that read the image first refuse one with no
-     object in it (jax3dc.predict.image_check);
+     object in it (jax3dc.predict.stage1.check_object_image);
   3. S rendered from the image's camera -> seg.png;
   4. stage 2: the structure model reads (I, S, SPEC §3 prompt) -> structure.json (validated,
      canonical); invalid output -> structure_raw.txt and a StructureError;
@@ -40,20 +40,19 @@ from jax3dc.grounding import Grounding
 from jax3dc.mounted import is_mounted
 from jax3dc.palette import object_palette
 from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
-from jax3dc.predict.image_check import check_object_image
 from jax3dc.predict.models import TextModel, code_model, structure_candidates, structure_model
 from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
 from jax3dc.predict.report import ReportInputs, write_report
 from jax3dc.predict.segmentation import default_camera, render_segmentation
-from jax3dc.predict.stage1 import (CODE, MESH, PARAMETERS, Stage1, parse_stage1, stage1_from_mesh,
-                                   stage1_from_parameters, stage1_from_parts_dir, stage1_from_program)
-from jax3dc.predict.stage1_readers import Reader, ReaderSettings, load_reader
+from jax3dc.predict.stage1 import (CODE, MESH, PARAMETERS, Reader, ReaderSettings, Stage1, check_object_image,
+                                   load_reader, parse_stage1, stage1_from_mesh, stage1_from_parameters,
+                                   stage1_from_parts_dir, stage1_from_program)
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
 from jax3dc.prompt import CODE_PROMPT, build_prompt
 from jax3dc.render import Camera, png_bytes
 from jax3dc.sampler import Sampler
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
-from jax3dc.structure.reply import json_text
+from jax3dc.structure.validate import json_text
 from jax3dc.verify.repair import repair
 from jax3dc.verify.select import Candidate, choose
 from jax3dc.verify.verdicts import Physics, VerdictCache
@@ -311,7 +310,7 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
     ``stage1``: "parameters", "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1); None:
     "parameters" when a stage-1 model is given or ships, else an InputFileError naming what to pass.
     ``structure_model_dir`` / ``code_model_dir``: checkpoint folders (``jax3dc.sampler.Sampler.load``);
-    ``stage1_model_dir``: the parameters backend's model folder (jax3dc.predict.stage1_readers; default:
+    ``stage1_model_dir``: the parameters backend's model folder (jax3dc.predict.stage1.load_reader; default:
     the shipped one). ``generate_structure`` (SPEC §3 prompt text -> structure JSON text, seeing I
     and S), ``generate_program`` (the code prompt -> part program text, seeing I) and
     ``read_parameters`` (I as RGB uint8 -> parameter text) replace them. ``camera``: the image's

@@ -8,8 +8,8 @@ two CPU cores in minutes and to ship in well under 2 MiB; the training recipe is
 needs) and ``model.safetensors``; ``load_reader(folder)`` gives ``image -> text``.
 """
 
-from jax3dc.stage1_net.decode import decode_parameters, decode_text, normalised_number
-from jax3dc.stage1_net.folder import MARKER, Stage1Network, load_network, load_reader, save_network
+from jax3dc.stage1_net.folder import (MARKER, Stage1Network, decode_parameters, decode_text, load_network, load_reader,
+                                      normalised_number, save_network)
 from jax3dc.stage1_net.image import ImageInputError, network_image
 from jax3dc.stage1_net.layout import OutputLayout, schemas_from_json, schemas_to_json
 from jax3dc.stage1_net.model import Stage1Net, Stage1NetConfig, forward

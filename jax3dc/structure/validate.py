@@ -1,4 +1,6 @@
-"""Parsing and validation of a structure document against every rule of SPEC §2.
+"""Parsing and validation of a structure document against every rule of SPEC §2, and the
+document in a model's reply (``json_text``: the text step between generation and
+``parse_structure``, shared by ``predict``, the verified choice and evaluation's scoring).
 
 A predicted document that breaks any rule is a parse failure, so the checker is strict (unknown
 keys, booleans where numbers belong, non-finite numbers and duplicate keys are all refused) and
@@ -50,6 +52,16 @@ RELATION_KEYS_REQUIRED = ("type", "a", "b")
 RELATION_KEYS_OPTIONAL = ("plane",)
 
 _DECIMAL_ID = re.compile(r"(0|[1-9][0-9]{0,17})")
+# Chat-template end markers a generation may still carry, and a Markdown code fence around JSON.
+_END_MARKERS = re.compile(r"(<\|im_end\|>|<\|endoftext\|>)\s*$")
+_FENCE = re.compile(r"^```(?:json)?\s*\n?(.*?)\n?```$", re.DOTALL)
+
+
+def json_text(raw: str) -> str:
+    """The JSON document in a raw generation: end-of-turn markers and a code fence removed."""
+    text = _END_MARKERS.sub("", raw.strip()).strip()
+    fenced = _FENCE.match(text)
+    return fenced.group(1).strip() if fenced else text
 
 
 def _show(value: object, limit: int = 40) -> str:

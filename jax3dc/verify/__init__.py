@@ -2,6 +2,8 @@
 repairs the joints it flags.
 
 ``select.choose`` ranks candidate texts; ``repair.repair`` tries alternatives for flagged joints;
-``verdicts.VerdictCache`` checks each distinct structure once for both. Evaluation runs them over a
-split's records (``eval/run_verify.py``, many objects at once in ``eval/run_verify_pool.py``).
+``verdicts.VerdictCache`` checks each distinct structure once for both; ``verified.verify_object``
+chooses and repairs one object, ``pool.verify_many`` many objects in worker processes. ``predict``
+runs the choice and the repair as steps of its own (each writes a file); evaluation runs the pool
+over a split's records (``eval/run_verify.py``).
 """

@@ -16,7 +16,7 @@ import trimesh
 from jax3dc.errors import StructureError
 from jax3dc.physics.findings import Verdict
 from jax3dc.structure import Box, Structure, canonicalize, parse_structure
-from jax3dc.structure.reply import json_text
+from jax3dc.structure.validate import json_text
 from jax3dc.verify.verdicts import Physics, VerdictCache
 
 

@@ -23,10 +23,8 @@ from jax3dc.factories.registry import SCHEMAS, run_parameters, sample_parameters
 from jax3dc.geometry.parts import load_parts
 from jax3dc.parameters import ParameterError, format_parameters, parse_parameters
 from jax3dc.predict import predict
-from jax3dc.predict import stage1_readers
-from jax3dc.predict.image_check import check_object_image
-from jax3dc.predict.stage1 import PARAMETERS, parse_stage1
-from jax3dc.predict.stage1_readers import ReaderKind
+from jax3dc.predict import stage1 as stage1_module
+from jax3dc.predict.stage1 import PARAMETERS, ReaderKind, check_object_image, parse_stage1
 from predict_cases import CAMERA, write_image
 from tests.tiny_checkpoint import write_tiny_release_vocab_checkpoint
 
@@ -50,8 +48,8 @@ def fake_net_folder(folder, monkeypatch, seen: list):
         seen.append(path)
         return lambda rgb: seen.append(rgb.shape) or GOOD
 
-    monkeypatch.setattr(stage1_readers, "READERS", (ReaderKind("stage1_net.json", "an image network", load),
-                                                    *stage1_readers.READERS))
+    readers = (ReaderKind("stage1_net.json", "an image network", load), *stage1_module.READERS)
+    monkeypatch.setattr(stage1_module, "READERS", readers)
     return folder
 
 
@@ -177,7 +175,7 @@ def test_another_reader_plugs_in_by_its_marker(image, tmp_path, monkeypatch):
     assert seen == [folder, (96, 96, 3)]
     assert result.stage1.program == run_parameters(parse_parameters(GOOD, SCHEMAS)).program_text
     with pytest.raises(InputFileError, match="stage1_net.json .*config.json"):
-        stage1_readers.load_reader(tmp_path, None)  # holds neither marker
+        stage1_module.load_reader(tmp_path, None)  # holds neither marker
 
 
 def test_a_category_fixed_in_place_is_mounted_unless_told(image, tmp_path):

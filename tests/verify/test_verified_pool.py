@@ -1,6 +1,9 @@
 """verify_many: many objects in worker processes give what one process gives, in job order."""
 
-from eval.run_verify_pool import Job, verify_many
+from functools import partial
+
+from eval.run_verify import record_object
+from jax3dc.verify.pool import Job, verify_many
 from jax3dc.verify.select import Candidate
 from jax3dc.structure import to_json
 from tests.verify.verified_cases import IMPORTED, checked_object, pivot_moved_away
@@ -14,12 +17,13 @@ def test_workers_agree_with_one_process_and_repair_failing_winners(checked_recor
     broken = to_json(pivot_moved_away(checked_object(box).target, 2))
     door = imported_records["Door/door_8877/0"]
     jobs = [
-        Job(box, (Candidate(broken, -1.0), Candidate(box.target, -3.0))),
-        Job(box, (Candidate(broken, -1.0),)),  # nothing better to choose: the winner is repaired
-        Job(door, (Candidate(door.target, -2.0),), {IMPORTED[0]: partnet_object(IMPORTED[0])}),
+        Job(box.key, (Candidate(broken, -1.0), Candidate(box.target, -3.0)), box),
+        Job(box.key, (Candidate(broken, -1.0),), box),  # nothing better to choose: the winner is repaired
+        Job(door.key, (Candidate(door.target, -2.0),), door),
     ]
-    alone = verify_many(jobs, workers=1)
-    pooled = verify_many(jobs, workers=2)
+    load = partial(record_object, sources={IMPORTED[0]: partnet_object(IMPORTED[0])})
+    alone = verify_many(jobs, load, workers=1)
+    pooled = verify_many(jobs, load, workers=2)
     assert [v.key for v in pooled] == [box.key, box.key, door.key]
     summary = [(v.choice.index, v.choice.reason, [r.flagged for r in v.choice.rows], v.repaired and v.repaired.repairs)
                for v in pooled]
@@ -36,10 +40,12 @@ def test_mjx_workers_choose_and_repair_as_c(checked_records):
     the choices, verdicts and repairs are C's."""
     box = checked_records[BOX]
     broken = to_json(pivot_moved_away(checked_object(box).target, 2))
-    jobs = [Job(box, (Candidate(broken, -1.0), Candidate(box.target, -3.0))), Job(box, (Candidate(broken, -1.0),))]
+    jobs = [Job(box.key, (Candidate(broken, -1.0), Candidate(box.target, -3.0)), box),
+            Job(box.key, (Candidate(broken, -1.0),), box)]
+    load = partial(record_object, sources={})
 
     def summary(verified):
         return [(v.choice.index, v.choice.reason, [r.verdict.to_json()["joints"] for r in v.choice.rows],
                  v.repaired and [r.to_dict() for r in v.repaired.repairs]) for v in verified]
 
-    assert summary(verify_many(jobs, workers=2, backend="mjx")) == summary(verify_many(jobs, workers=1))
+    assert summary(verify_many(jobs, load, workers=2, backend="mjx")) == summary(verify_many(jobs, load, workers=1))
