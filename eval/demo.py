@@ -118,10 +118,9 @@ def _predict_one(record, joints: int, out: Path, checkpoints: Checkpoints) -> tu
         written = sorted(p.name for p in (out / "asset").iterdir()) if (out / "asset").is_dir() else []
         return {"key": record.key, "status": "partial", "out": str(out / "asset"), "reason": str(e),
                 "written": written}, None
-    verdict = result.verdict or {}
     return {"key": record.key, "status": "done", "out": str(out / "asset"), "joints": len(result.structure.joints()),
-            "physics_ok": verdict.get("ok"), "files": {k: str(v) for k, v in result.files.items()}}, \
-        to_dict(result.structure)
+            "physics_ok": result.verdict.ok if result.verdict else None,
+            "files": {k: str(v) for k, v in result.files.items()}}, to_dict(result.structure)
 
 
 def _pixels_entry(result: PixelsResult, out: Path) -> dict:

@@ -1,7 +1,9 @@
 """The report folder of ``jax3dc physics sweep``: verdict lines, a summary, plots and an index.
 
 Each object's plot is drawn where it was checked (``plot_penetration``, in the sweep's worker
-processes); ``write_report`` then writes the lines, the summary and the index that links the plots.
+processes); ``write_report`` then writes the lines, the summary and the index that links the plots,
+from each object's typed verdict: the summary counts the joints' findings by check, the lines and
+the index hold their reason strings.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from jax3dc.errors import InputFileError
+from jax3dc.physics.findings import FAILURE, WARNING, Verdict, describe
 
 
 def plot_penetration(object_id: str, curves: dict[int, Any], path: Path) -> None:
@@ -37,31 +40,30 @@ def plot_penetration(object_id: str, curves: dict[int, Any], path: Path) -> None
         plt.close(fig)
 
 
-def _kind(reason: str) -> str:
-    """A reason or warning without its values ("penetrates part 3 at q=0.4" -> "penetrates part 3")."""
-    return reason.split(" at q=")[0].split(" (")[0]
-
-
 def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], out: Path,
                  device: dict[str, Any] | None = None) -> dict[str, Any]:
     """Write verdicts.jsonl, costs.jsonl (each result's "cost", where it has one), summary.json
     (with ``device``, what the MJX sweep's accelerator did) and index.md (linking each result's
-    "plot", a path relative to ``out``, where it has one); return the summary."""
+    "plot", a path relative to ``out``, where it has one); return the summary. Each result's
+    "verdict" is a ``Verdict``; the summary's "reasons" and "warnings" count the joints' failures
+    and warnings by check (``jax3dc.physics.findings.CHECKS``)."""
     try:
         out.mkdir(parents=True, exist_ok=True)
-        joints = [j for r in results for j in r["verdict"]["joints"].values()]
-        reasons = Counter(_kind(reason) for j in joints for reason in j["reasons"])
-        warnings = Counter(_kind(warning) for j in joints for warning in j.get("warnings", []))
+        verdicts: list[Verdict] = [r["verdict"] for r in results]
+        joints = sum(len(v.joint_parts) for v in verdicts)
+        found = [f for v in verdicts for p in v.joint_parts for f in v.joint_findings(p)]
+        reasons = Counter(f.check for f in found if f.severity == FAILURE)
+        warnings = Counter(f.check for f in found if f.severity == WARNING)
         summary = {
-            "objects": len(results), "objects_ok": sum(r["verdict"]["ok"] for r in results),
-            "joints": len(joints), "joints_ok": sum(j["ok"] for j in joints),
+            "objects": len(results), "objects_ok": sum(v.ok for v in verdicts),
+            "joints": joints, "joints_ok": joints - sum(v.flagged for v in verdicts),
             "reasons": dict(reasons.most_common()), "warnings": dict(warnings.most_common()), "skipped": len(skipped),
         }
         if device is not None:
             summary["device"] = device
         with (out / "verdicts.jsonl").open("w", encoding="utf-8") as f:
             for r in results:
-                f.write(json.dumps({"object": r["object"], "category": r["category"], **r["verdict"]}) + "\n")
+                f.write(json.dumps({"object": r["object"], "category": r["category"], **r["verdict"].to_json()}) + "\n")
             for s in skipped:
                 f.write(json.dumps({"object": s["object"], "skipped": s["why"]}) + "\n")
         with (out / "costs.jsonl").open("w", encoding="utf-8") as f:
@@ -73,9 +75,11 @@ def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], o
                  f"{summary['joints_ok']} / {summary['joints']} joints pass, {len(skipped)} skipped.", "",
                  "| object | joint | ok | reasons | warnings |", "|---|---|---|---|---|"]
         for r in results:
-            for part, j in r["verdict"]["joints"].items():
-                lines.append(f"| {r['object']} | {part} | {'yes' if j['ok'] else 'no'} | {'; '.join(j['reasons'])} | "
-                             f"{'; '.join(j.get('warnings', []))} |")
+            verdict = r["verdict"]
+            for part in verdict.joint_parts:
+                reasons = "; ".join(describe(f) for f in verdict.joint_findings(part, FAILURE))
+                warned = "; ".join(describe(f) for f in verdict.joint_findings(part, WARNING))
+                lines.append(f"| {r['object']} | {part} | {'no' if reasons else 'yes'} | {reasons} | {warned} |")
             if r.get("plot"):
                 lines.append(f"\n![{r['object']}]({r['plot']})\n")
         (out / "index.md").write_text("\n".join(lines) + "\n", encoding="utf-8")

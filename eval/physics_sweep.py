@@ -30,7 +30,7 @@ from jax3dc.export.simulation import collision_pieces
 from jax3dc.physics.cli import VERDICT_HELP
 from jax3dc.physics.cpu_backend import final_qpos
 from jax3dc.physics.mjx_service import client, serve_workers
-from jax3dc.physics.verdict import check_object_with_curves
+from jax3dc.physics.verdict import verdict_with_curves
 from jax3dc.program import run_program
 from jax3dc.structure import parse_structure
 
@@ -138,13 +138,13 @@ def _check_job(job: _SweepJob) -> dict[str, Any]:
     start = time.perf_counter()
     with np.errstate(all="ignore"):
         pieces = collision_pieces(structure, parts, job.scale)
-    verdict, curves = check_object_with_curves(structure, parts, job.scale, mounted=job.mounted, threads=job.threads,
-                                               pieces=pieces, **extra)
+    verdict, curves = verdict_with_curves(structure, parts, job.scale, mounted=job.mounted, threads=job.threads,
+                                          pieces=pieces, **extra)
     seconds = time.perf_counter() - start
     plot = None
     if curves:
         plot = f"plots/{job.object_id}.png"
         plot_penetration(job.object_id, curves, job.out / plot)
     return {"object": job.object_id, "category": job.category, "verdict": verdict, "plot": plot,
-            "cost": {"seconds": round(seconds, 3), "parts": len(parts), "joints": len(verdict["joints"]),
+            "cost": {"seconds": round(seconds, 3), "parts": len(parts), "joints": len(verdict.joint_parts),
                      "pieces": sum(len(p) for p in pieces.values())}}

@@ -71,7 +71,7 @@ def predict_record(record: Record, reference: Reference, out: Path, read_paramet
                                   run_parameters)
     pairs = match_bounds(box_bounds(reference.boxes), box_bounds(part_boxes(result.stage1.parts)))
     renamed = relabel(result.structure, {pred: ref for ref, pred, _ in pairs}, reference.boxes)
-    ok = (result.verdict or {}).get("ok")
+    ok = result.verdict.ok if result.verdict else None
     return PixelsResult(record.key, to_dict(renamed), len(pairs), len(result.stage1.parts) - len(pairs),
                         len(reference.boxes) - len(pairs), stage1, seconds, None, ok)
 

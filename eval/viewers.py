@@ -56,7 +56,7 @@ def write_object_viewer(case: Case, record: Any, sources: Mapping[str, Path], pa
         raise Jax3dcError(f"record {case.key}: cannot rebuild its parts: no meta field {e}") from None
     verdict = verdict_with_curves(case.prediction, parts, scale, mounted=mounted)[0]
     glb = gltf_bytes(case.prediction, parts, scale)
-    write_viewer(ViewerInputs(glb, case.key, case.key, verdict.to_json(), record.image_png, record.seg_png), path)
+    write_viewer(ViewerInputs(glb, case.key, case.key, verdict, record.image_png, record.seg_png), path)
     return verdict
 
 

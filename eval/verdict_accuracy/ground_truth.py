@@ -1,8 +1,9 @@
 """Ground-truth objects for measuring the checks: procedural factories and imported fixtures.
 
 ``false_alarms`` counts flagged joints on correct objects; ``mutation_detection`` counts mutated
-joints flagged with an expected reason, per mutation kind. Mutations that do not change the motion
-(the mutated and the original joint sweep the moved parts through the same poses) are skipped.
+joints flagged by an expected check (``Mutation.expected``), per mutation kind. Mutations that do
+not change the motion (the mutated and the original joint sweep the moved parts through the same
+poses) are skipped.
 A joint is flagged by a failure or a warning (a limit a little past where it stops: the verdict
 passes, the user is told), the same joints as before warnings existed; both counts also say how
 many of their joints fail ("failing", "failed right reason"), which is what the verdict counts.
@@ -21,10 +22,11 @@ import trimesh
 from data_pipeline.importers.source import import_object
 from eval.verdict_accuracy.mutations import Mutation, mutations_of
 from jax3dc.factories import FACTORIES, generate_object
-from jax3dc.physics.verdict import check_object
 from jax3dc.mounted import is_mounted
+from jax3dc.physics.findings import FAILURE, WARNING, Finding, Verdict
 from jax3dc.physics.kinematics import (SAME_MOTION_TOL_NU, same_line, subtree_points, subtree_vertices_at,
                                        sweep_distance, symmetric_about)
+from jax3dc.physics.verdict import verdict_with_curves
 from jax3dc.structure.schema import Structure
 
 
@@ -54,24 +56,31 @@ def imported_objects(directories: Iterable[Path]) -> Iterator[GroundTruthObject]
                                 is_mounted(obj.meta.get("category")))
 
 
+def check(obj: GroundTruthObject, structure: Structure, backend: str) -> Verdict:
+    """The verdict of ``structure`` (the object's own or a mutation of it) on the object's parts."""
+    return verdict_with_curves(structure, obj.parts, obj.scale, backend=backend, mounted=obj.mounted)[0]
+
+
 def false_alarms(objects: Iterable[GroundTruthObject], on_result: Callable | None = None, backend: str = "c") -> dict:
-    """Flagged ground-truth joints (the issue's rate), and objects whose whole verdict fails."""
+    """Flagged ground-truth joints (the issue's rate), their findings (joint by joint, each joint's
+    failures then its warnings), and objects whose whole verdict fails."""
     joints = flagged = failing = 0
-    reasons: Counter = Counter()
+    findings: list[Finding] = []
     failed: list[str] = []
     for obj in objects:
-        verdict = check_object(obj.structure, obj.parts, obj.scale, backend=backend, mounted=obj.mounted)
-        if not verdict["ok"]:
+        verdict = check(obj, obj.structure, backend)
+        if not verdict.ok:
             failed.append(obj.name)
-        for part, joint in verdict["joints"].items():
+        for part in verdict.joint_parts:
+            failures, warnings = verdict.joint_findings(part, FAILURE), verdict.joint_findings(part, WARNING)
             joints += 1
-            flagged += bool(joint["reasons"] or joint["warnings"])
-            failing += not joint["ok"]
-            reasons.update(r.split(" at ")[0] for r in joint["reasons"] + joint["warnings"])
+            flagged += bool(failures or warnings)
+            failing += bool(failures)
+            findings.extend(failures + warnings)
         if on_result:
             on_result(obj, verdict)
     return {"joints": joints, "flagged": flagged, "rate": flagged / max(joints, 1), "failing": failing,
-            "reasons": dict(reasons), "objects_failed": failed}
+            "findings": findings, "objects_failed": failed}
 
 
 def changes_motion(original: Structure, mutation: Mutation, parts: dict[int, trimesh.Trimesh]) -> bool:
@@ -104,13 +113,12 @@ def mutation_detection(objects: Iterable[GroundTruthObject], on_result: Callable
             if not changes_motion(obj.structure, mutation, obj.parts):
                 counts["skipped (same motion)"] += 1
                 continue
-            verdict = check_object(mutation.structure, obj.parts, obj.scale, backend=backend, mounted=obj.mounted)
-            joint = verdict["joints"][str(mutation.part)]
-            reasons = joint["reasons"] + joint["warnings"]
+            verdict = check(obj, mutation.structure, backend)
+            found = verdict.joint_findings(mutation.part)
             counts["total"] += 1
-            counts["flagged"] += bool(reasons)
-            counts["right reason"] += any(r.startswith(e) for r in reasons for e in mutation.expected)
-            counts["failed right reason"] += any(r.startswith(e) for r in joint["reasons"] for e in mutation.expected)
+            counts["flagged"] += bool(found)
+            counts["right reason"] += mutation.caught(found)
+            counts["failed right reason"] += mutation.caught(verdict.joint_findings(mutation.part, FAILURE))
             if on_result:
                 on_result(obj, mutation, verdict)
     return {kind: dict(c) for kind, c in per_kind.items()}

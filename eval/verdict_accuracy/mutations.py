@@ -1,23 +1,29 @@
 """Mutations of a correct structure, each of which breaks its articulation in a known way.
 
 Used to measure how often the checks catch a wrong prediction, and whether for the right reason.
-Each mutation names the reasons ("penetrates", "detached", "pivot detached", "limit unreachable",
-"penetrates parent at rest", "disagrees with part": its mirror twin or duplicate articulates
-otherwise) any of which counts as a correct flag of the mutated joint.
+Each mutation names the checks (``jax3dc.physics.findings.CHECKS``) a finding of which on the mutated
+joint counts as a correct flag: the groups below, named by how their reasons start.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Iterable
 
 import numpy as np
 import trimesh
 
-from jax3dc.physics.findings import RELATION_REASON as RELATION
+from jax3dc.physics.findings import Finding
 from jax3dc.structure.schema import Joint, Structure
 
 PIVOT_SHIFT_NU = 0.25  # how far "pivot moved" moves the pivot off the part boundary
+PENETRATES = ("rest parent", "penetration", "crossing", "floor")  # "penetrates ..."
+DETACHED = ("detached", "lifted off", "guide", "carried out of guide", "rest gap")  # "detached from ..."
+PIVOT = ("pivot",)  # "pivot detached"
+LIMIT = ("limit",)  # "limit unreachable" (a failure) or "limit past contact" (a warning)
+# "disagrees with part": its mirror twin or duplicate articulates otherwise
+RELATION = ("relation parents", "relation joint type", "relation motion")
 
 
 @dataclass(frozen=True)
@@ -25,7 +31,11 @@ class Mutation:
     kind: str
     part: int  # the jointed part whose joint (or parent) was changed
     structure: Structure
-    expected: tuple[str, ...]  # reason prefixes that count as the right flag
+    expected: tuple[str, ...]  # the checks whose findings count as the right flag
+
+    def caught(self, findings: Iterable[Finding]) -> bool:
+        """Whether one of ``findings`` (those on the mutated joint) is of an expected check."""
+        return any(f.check in self.expected for f in findings)
 
 
 def mutations_of(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> list[Mutation]:
@@ -37,26 +47,26 @@ def mutations_of(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> lis
         if joint is None:
             continue
         axis = np.asarray(joint.axis, dtype=np.float64)
-        motion = ("penetrates", "detached", "limit unreachable", "limit past contact", RELATION)
+        motion = PENETRATES + DETACHED + LIMIT + RELATION
         out.append(Mutation("flipped axis", part, _with_joint(structure, part, dataclasses.replace(
             joint, axis=tuple(-axis))), motion))
         out.append(Mutation("range doubled", part, _with_joint(structure, part, dataclasses.replace(
             joint, range=_doubled(joint))), motion))
         swapped = "slide" if joint.type == "hinge" else "hinge"
         out.append(Mutation("hinge-slide swapped", part, _with_joint(structure, part, dataclasses.replace(
-            joint, type=swapped)), motion + ("pivot detached",)))
+            joint, type=swapped)), motion + PIVOT))
         if joint.type == "hinge":  # a slide's pivot does not change its motion
             shift = _away_from(centroids[part], np.asarray(joint.pivot), axis)
             out.append(Mutation("pivot moved", part, _with_joint(structure, part, dataclasses.replace(
-                joint, pivot=tuple(np.asarray(joint.pivot) + PIVOT_SHIFT_NU * shift))), ("pivot detached",) + motion))
+                joint, pivot=tuple(np.asarray(joint.pivot) + PIVOT_SHIFT_NU * shift))), PIVOT + motion))
         far = _farthest_other_part(structure, part, centroids)
         if far is not None:
             out.append(Mutation("attached to a far part", part, _with_parent(structure, part, far),
-                                ("pivot detached", "detached", "penetrates", RELATION)))
+                                PIVOT + DETACHED + PENETRATES + RELATION))
         wrong = _other_non_descendant(structure, part, node.parent, centroids)
         if wrong is not None and wrong != far:
             out.append(Mutation("wrong parent", part, _with_parent(structure, part, wrong),
-                                ("pivot detached", "detached", "penetrates", RELATION)))
+                                PIVOT + DETACHED + PENETRATES + RELATION))
     return out
 
 

@@ -7,7 +7,8 @@ the repairer and predict pass around; its pass/fail counts failures only; a warn
 user may want to act on that a simulator still runs (a ground-truth limit a few degrees past the
 first contact: the joint stops there, ``reachable``), and combination interpenetration (real
 objects have dependent joints). ``describe`` turns a finding into the short reason strings of the
-verdict JSON (``Verdict.to_json``, see ``jax3dc.physics.verdict``), for reports, the CLI and the viewer.
+verdict JSON (``Verdict.to_json``, see ``jax3dc.physics.verdict``), for reports, the CLI and the viewer,
+which are made where a file or page is written; ``Verdict.from_json`` types a verdict file again.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, Mapping
 
 from jax3dc.physics.tolerances import DETACH_TOL_NU
 
@@ -50,6 +51,7 @@ CHECKS = {
 # Decimals of the floats a verdict file holds: C MuJoCo (float64) and MJX (float32) measure the
 # same depth 3e-8 apart, and 1e-4 nu is far below every tolerance, so both write the same file.
 JSON_DECIMALS = 4
+FLOAT_FIELDS = ("depth", "reachable", "tilt")  # a finding's optional floats
 
 
 @dataclass(frozen=True)
@@ -78,7 +80,7 @@ class Finding:
         for name in ("joints", "parts"):
             object.__setattr__(self, name, tuple(int(p) for p in getattr(self, name)))
         object.__setattr__(self, "state", tuple((int(j), float(v)) for j, v in self.state))
-        for name in ("depth", "reachable", "tilt"):
+        for name in FLOAT_FIELDS:
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, float(getattr(self, name)))
 
@@ -97,9 +99,14 @@ class Finding:
         return out
 
     @classmethod
-    def from_json(cls, data: dict[str, Any]) -> Finding:
+    def from_json(cls, data: Mapping[str, Any]) -> Finding:
+        """The finding ``to_json`` wrote; a float written as null (a blown-up rollout's) is NaN again,
+        as a field ``to_json`` leaves out is None."""
         names = {f.name for f in dataclasses.fields(cls)}
         args = {k: v for k, v in data.items() if k in names}
+        for key in FLOAT_FIELDS:
+            if key in args and args[key] is None:
+                args[key] = math.nan
         for key in ("joints", "parts", "joint_types"):
             if key in args:
                 args[key] = tuple(args[key])
@@ -187,21 +194,41 @@ class Verdict:
         """Larger is better: the object passes, then fewer failing joints."""
         return self.ok, -self.flagged
 
-    def to_json(self) -> dict[str, Any]:
-        """The verdict JSON: "ok", per joint "ok", its failure "reasons" and its "warnings",
-        object-level "checks" (rest, combinations, gravity when it ran) as reason strings, and the
-        typed "findings" themselves."""
-        joints = {str(p): {"ok": True, "reasons": [], "warnings": []} for p in self.joint_parts}
+    def joint_findings(self, part: int, severity: Severity | None = None) -> tuple[Finding, ...]:
+        """The findings blamed on the joint of ``part`` in the order found (only those of ``severity``
+        when given): what a report or the viewer shows beside that joint."""
+        return tuple(f for f in self.findings if f.check not in OBJECT_CHECKS and f.joints[0] == part
+                     and severity in (None, f.severity))
+
+    def object_reasons(self) -> dict[str, list[str]]:
+        """The reason strings of the object-level findings per key of the JSON's "checks": "rest" and
+        "combinations" (each sorted), "gravity" when the test ran."""
         checks: dict[str, list[str]] = {"rest": [], "combinations": []}
         if self.gravity_checked:
             checks["gravity"] = []
         for f in self.findings:
             if f.check in OBJECT_CHECKS:
                 checks[OBJECT_CHECKS[f.check]].append(describe(f))
-                continue
-            joint = joints[str(f.joints[0])]
-            joint["reasons" if f.severity == FAILURE else "warnings"].append(describe(f))
-            joint["ok"] = not joint["reasons"]
         checks["rest"].sort()
         checks["combinations"].sort()
-        return {"ok": self.ok, "joints": joints, "checks": checks, "findings": [f.to_json() for f in self.findings]}
+        return checks
+
+    def to_json(self) -> dict[str, Any]:
+        """The verdict JSON: "ok", per joint "ok", its failure "reasons" and its "warnings",
+        object-level "checks" (rest, combinations, gravity when it ran) as reason strings, and the
+        typed "findings" themselves."""
+        joints = {}
+        for p in self.joint_parts:
+            reasons = [describe(f) for f in self.joint_findings(p, FAILURE)]
+            joints[str(p)] = {"ok": not reasons, "reasons": reasons,
+                              "warnings": [describe(f) for f in self.joint_findings(p, WARNING)]}
+        return {"ok": self.ok, "joints": joints, "checks": self.object_reasons(),
+                "findings": [f.to_json() for f in self.findings]}
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> Verdict:
+        """The verdict ``to_json`` wrote (physics.json, a verdicts line): its joints are the keys of
+        "joints", in their order; its reason strings are made again from the findings. An
+        AttributeError, KeyError, TypeError or ValueError says the data is not a verdict."""
+        return cls(tuple(int(p) for p in data["joints"]), tuple(Finding.from_json(f) for f in data["findings"]),
+                   "gravity" in data["checks"])

@@ -56,18 +56,7 @@ def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale:
     ``pieces``: the parts' collision pieces (``jax3dc.export.simulation``) when they are given, as an
     exported file gives them, instead of decomposing the meshes.
     """
-    return check_object_with_curves(structure, parts, scale, backend, dynamics, mounted, pieces=pieces)[0]
-
-
-def check_object_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
-                             backend: str = "c", dynamics: bool = True, mounted: bool = False,
-                             threads: int | None = None, pieces: dict[int, list[np.ndarray]] | None = None,
-                             penetration: Penetration | None = None, rollout: Rollout | None = None
-                             ) -> tuple[dict[str, Any], dict[int, Any]]:
-    """``verdict_with_curves`` with the verdict as JSON (the form files, the CLI and reports hold)."""
-    verdict, curves = verdict_with_curves(structure, parts, scale, backend, dynamics, mounted, threads, pieces,
-                                          penetration, rollout)
-    return verdict.to_json(), curves
+    return verdict_with_curves(structure, parts, scale, backend, dynamics, mounted, pieces=pieces)[0].to_json()
 
 
 def verdict_with_curves(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,

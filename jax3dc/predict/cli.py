@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
                      constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
                      mounted=args.mounted, on_output=show, progress=True, max_image_pixels=args.max_image_pixels,
                      ground_joints=args.ground_joints, num_joints=args.joints)
-    verdict = "passes" if result.verdict and result.verdict.get("ok") else "fails"
+    verdict = "passes" if result.verdict and result.verdict.ok else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
     held = " with its root held (mounted)" if result.mounted else ""
     print(f"{len(result.stage1.parts)} parts, {joints} joints; the physics check{held} {verdict} (see physics.json)")

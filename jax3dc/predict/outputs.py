@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
 import trimesh
 
 from jax3dc.export.blender import export_blender
@@ -18,6 +17,7 @@ from jax3dc.export.gltf import export_gltf
 from jax3dc.export.mjcf import export_mjcf
 from jax3dc.export.urdf import export_urdf
 from jax3dc.geometry.mesh_size import PHYSICS_MAX_FACES, check_object_faces
+from jax3dc.physics.findings import Verdict
 from jax3dc.export.usd import export_usd
 from jax3dc.structure.schema import Structure
 from jax3dc.viewer import ViewerInputs, write_viewer
@@ -48,29 +48,16 @@ def write_exports(structure: Structure, parts: dict[int, trimesh.Trimesh], out: 
     return files
 
 
-def _plain(value):
-    """JSON-ready copy: numpy scalars/arrays to Python numbers/lists, keys to strings."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _plain(value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-def write_physics(verdict: dict, out: Path) -> tuple[Path, dict]:
-    """physics.json: the object's plausibility verdict (ok, per-joint reasons, checks), computed by
-    the caller's VerdictCache (``write_exports`` has refused an object too large for it)."""
-    verdict = _plain(verdict)
+def write_physics(verdict: Verdict, out: Path) -> Path:
+    """physics.json: the object's plausibility verdict as JSON (``Verdict.to_json``: ok, per-joint
+    reasons, checks, findings), computed by the caller's VerdictCache (``write_exports`` has refused
+    an object too large for it)."""
     path = out / "physics.json"
-    path.write_text(json.dumps(verdict, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-    return path, verdict
+    path.write_text(json.dumps(verdict.to_json(), indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    return path
 
 
-def write_viewer_page(out: Path, glb: Path, verdict: dict | None, image_png: bytes, seg_png: bytes) -> Path:
+def write_viewer_page(out: Path, glb: Path, verdict: Verdict | None, image_png: bytes, seg_png: bytes) -> Path:
     """viewer.html (+ viewer_files/): the exported GLB in 3D with joint sliders, the verdict, I and S."""
     return write_viewer(ViewerInputs(glb.read_bytes(), out.resolve().name, str(glb), verdict, image_png, seg_png),
                         out / "viewer.html")

@@ -39,6 +39,7 @@ from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.grounding import Grounding
 from jax3dc.mounted import is_mounted
 from jax3dc.palette import object_palette
+from jax3dc.physics.findings import Verdict
 from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.predict.models import TextModel, code_model, structure_candidates, structure_model
 from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
@@ -77,7 +78,7 @@ class PredictResult:
     files: dict[str, Path] = field(default_factory=dict)
     raw_text: str | None = None
     structure: Structure | None = None
-    verdict: dict | None = None
+    verdict: Verdict | None = None
     mounted: bool = False  # whether the physics check held the root and object.xml keeps its base fixed
 
 
@@ -292,8 +293,8 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
     for name, path in write_exports(named, parts_in.parts, outputs.out, metres, settings.mounted).items():
         outputs.wrote(name, path)
     progress.step("physics")
-    path, result.verdict = write_physics(check(structure).to_json(), outputs.out)
-    outputs.wrote("physics", path)
+    result.verdict = check(structure)
+    outputs.wrote("physics", write_physics(result.verdict, outputs.out))
 
 
 def predict(image: str | Path | Image.Image, stage1: str | None = None, structure_model_dir: str | Path | None = None,

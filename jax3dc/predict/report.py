@@ -21,6 +21,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from jax3dc.overlay import draw_overlay
 from jax3dc.palette import hex_colour, part_colour
+from jax3dc.physics.findings import FAILURE, WARNING, Verdict, describe
 from jax3dc.structure import Box, Joint, Structure
 
 PANEL = 512  # px, side of each image panel of report.png
@@ -40,7 +41,7 @@ class ReportInputs:
     camera: Mapping[str, Any]  # the camera S was rendered from
     camera_given: bool  # the image's own camera (joints line up with I), not the default view
     structure: Structure | None
-    verdict: Mapping[str, Any] | None
+    verdict: Verdict | None
     error: str | None  # why there is no structure / verdict
 
 
@@ -63,7 +64,7 @@ def tree_lines(r: ReportInputs) -> list[tuple[int, int, str]]:
     if r.structure is None:
         return [(0, pid, part_label(r, pid)) for pid in sorted(r.boxes)]
     s = r.structure
-    joints = (r.verdict or {}).get("joints", {})
+    checked = set(r.verdict.joint_parts) if r.verdict is not None else set()
     out: list[tuple[int, int, str]] = []
 
     def visit(pid: int, depth: int) -> None:
@@ -72,11 +73,12 @@ def tree_lines(r: ReportInputs) -> list[tuple[int, int, str]]:
         text = part_label(r, pid) + (f" ({material.family})" if material else "")
         if node.joint is not None:
             text += " | " + joint_text(node.joint)
-            check = joints.get(str(pid))
-            if check is not None:
-                text += " | physics: " + ("ok" if check["ok"] else "; ".join(check["reasons"]))
-                if check.get("warnings"):
-                    text += " (warning: " + "; ".join(check["warnings"]) + ")"
+            if pid in checked:
+                reasons = [describe(f) for f in r.verdict.joint_findings(pid, FAILURE)]
+                warnings = [describe(f) for f in r.verdict.joint_findings(pid, WARNING)]
+                text += " | physics: " + ("; ".join(reasons) if reasons else "ok")
+                if warnings:
+                    text += " (warning: " + "; ".join(warnings) + ")"
         elif node.parent is not None:
             text += " | rigid"
         out.append((depth, pid, text))
@@ -99,8 +101,8 @@ def relations_line(r: ReportInputs) -> str | None:
 def verdict_line(r: ReportInputs) -> str:
     if r.verdict is None:
         return "physics: not checked" + (f" ({r.error})" if r.error else "")
-    problems = [f"{k}: {', '.join(map(str, v))}" for k, v in sorted(r.verdict.get("checks", {}).items()) if v]
-    verdict = "PASS" if r.verdict.get("ok") else "FAIL"
+    problems = [f"{k}: {', '.join(v)}" for k, v in sorted(r.verdict.object_reasons().items()) if v]
+    verdict = "PASS" if r.verdict.ok else "FAIL"
     return f"physics: {verdict}" + ("" if not problems else " | " + "; ".join(problems))
 
 

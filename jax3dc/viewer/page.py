@@ -16,9 +16,10 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from string import Template
-from typing import Any, Mapping
+from typing import Any
 
 from jax3dc.errors import InputFileError
+from jax3dc.physics.findings import Verdict
 from jax3dc.viewer.model import viewer_model
 
 ASSETS_DIR = "viewer_files"
@@ -29,13 +30,13 @@ ASSETS = ("viewer.js", "viewer.css", "vendor/three.bundle.min.js", "vendor/LICEN
 
 @dataclass(frozen=True)
 class ViewerInputs:
-    """One object's page: its GLB (``jax3dc.export.gltf``), physics verdict (``physics.json``'s
-    dict) and the PNG bytes of I and S, each optional but the GLB."""
+    """One object's page: its GLB (``jax3dc.export.gltf``), physics verdict and the PNG bytes of I
+    and S, each optional but the GLB."""
 
     glb: bytes
     title: str
     where: str  # names the GLB's origin in errors
-    verdict: Mapping[str, Any] | None = None
+    verdict: Verdict | None = None
     image_png: bytes | None = None
     seg_png: bytes | None = None
 
@@ -48,12 +49,9 @@ def page_data(inputs: ViewerInputs) -> dict[str, Any]:
     """Everything the page's script reads (see viewer.js)."""
     model = viewer_model(inputs.glb, inputs.where)
     verdict = None
-    if inputs.verdict is not None:
-        joints = {str(k): {"ok": bool(v.get("ok")), "reasons": [str(r) for r in v.get("reasons", [])],
-                           "warnings": [str(w) for w in v.get("warnings", [])]}
-                  for k, v in (inputs.verdict.get("joints") or {}).items()}
-        checks = {str(k): [str(x) for x in v] for k, v in (inputs.verdict.get("checks") or {}).items() if v}
-        verdict = {"ok": bool(inputs.verdict.get("ok")), "joints": joints, "checks": checks}
+    if inputs.verdict is not None:  # the verdict JSON's reasons, without the findings the page does not read
+        data = inputs.verdict.to_json()
+        verdict = {"ok": data["ok"], "joints": data["joints"], "checks": {k: v for k, v in data["checks"].items() if v}}
     return {
         "title": inputs.title,
         "glb": base64.b64encode(inputs.glb).decode("ascii"),

@@ -13,6 +13,7 @@ from jax3dc.errors import InputFileError
 from jax3dc.export.cli import _scale_from_meta  # the scale rule of `jax3dc export`
 from jax3dc.export.gltf import gltf_bytes
 from jax3dc.geometry.parts import load_parts
+from jax3dc.physics.findings import Verdict
 from jax3dc.structure import parse_structure
 from jax3dc.viewer.page import ViewerInputs
 
@@ -26,18 +27,20 @@ def _bytes_if_there(path: Path) -> bytes | None:
         raise InputFileError(path, f"cannot read: {e.strerror or e}") from None
 
 
-def read_verdict(path: Path) -> dict | None:
-    """physics.json (``jax3dc.physics`` verdict) if it exists; malformed is an input error."""
+def read_verdict(path: Path) -> Verdict | None:
+    """physics.json (``Verdict.to_json``) typed again, if it exists; malformed is an input error."""
     raw = _bytes_if_there(path)
     if raw is None:
         return None
     try:
-        verdict = json.loads(raw.decode("utf-8"))
+        data = json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, ValueError) as e:
         raise InputFileError(path, f"not JSON: {e}") from None
-    if not isinstance(verdict, dict) or not isinstance(verdict.get("joints", {}), dict):
-        raise InputFileError(path, 'not a physics verdict: expected {"ok", "joints": {part id: ...}, "checks"}')
-    return verdict
+    try:
+        return Verdict.from_json(data)
+    except (AttributeError, KeyError, TypeError, ValueError) as e:
+        raise InputFileError(path, f'not a physics verdict ({type(e).__name__}: {e}): expected '
+                                   '{"ok", "joints": {part id: ...}, "checks", "findings"}') from None
 
 
 def _structure_glb(structure_path: Path, parts_dir: Path, scale: float | None) -> bytes:

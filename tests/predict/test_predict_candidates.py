@@ -32,5 +32,5 @@ def test_the_winner_is_parsed_once_and_each_verdict_computed_once(tmp_path, monk
     choice = json.loads((out / "candidates.json").read_text())
     assert choice["winner"] == 1 and choice["reason"] == "highest log-likelihood among equals"
     assert json.loads((out / "repairs.json").read_text()) == []
-    assert json.loads((out / "physics.json").read_text())["ok"] == result.verdict["ok"]
+    assert json.loads((out / "physics.json").read_text())["ok"] == result.verdict.ok
     assert (out / "object.xml").is_file() and to_json(result.structure) == (out / "structure.json").read_text()

@@ -27,7 +27,7 @@ def test_mounted_prediction_holds_the_root_in_the_physics_check(tmp_path):
     result = predict(write_image(tmp_path / "image.png"), f"parts:{tmp_path / 'parts'}", out=tmp_path / "out",
                      generate_structure=lambda prompt: target, mounted=True)
     verdict = json.loads((tmp_path / "out" / "physics.json").read_text())
-    assert verdict == result.verdict and verdict["checks"]["gravity"] == []
+    assert verdict == result.verdict.to_json() and verdict["checks"]["gravity"] == []
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "object.xml"))
     assert model.njnt == len(faucet.structure.joints()) > 0
     assert mujoco.mjtJoint.mjJNT_FREE not in set(model.jnt_type)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from jax3dc.physics.findings import WARNING, Finding, Verdict
 from jax3dc.predict import predict
 from jax3dc.predict.report import PANEL
 from jax3dc.palette import hex_colour, part_colour
@@ -93,9 +94,8 @@ def test_a_joint_warning_is_written_beside_its_passing_verdict(code_run):
 
     structure = code_run.structure
     jointed = next(pid for pid, node in structure.nodes.items() if node.joint is not None)
-    warning = "limit past contact: hi (stops at q=1.2)"
-    verdict = {"ok": True, "joints": {str(jointed): {"ok": True, "reasons": [], "warnings": [warning]}}}
+    verdict = Verdict((jointed,), (Finding("limit", WARNING, joints=(jointed,), reachable=1.2, limit="hi"),))
     inputs = ReportInputs(image=None, seg=None, palette=code_run.palette, names={}, boxes={}, camera={},
                           camera_given=False, structure=structure, verdict=verdict, error=None)
     text = dict((pid, t) for _, pid, t in tree_lines(inputs))[jointed]
-    assert text.endswith(f"physics: ok (warning: {warning})")
+    assert text.endswith("physics: ok (warning: limit past contact: hi (stops at q=1.200))")

@@ -13,7 +13,7 @@ from jax3dc.cli import main
 from jax3dc.export.gltf import gltf_bytes
 from jax3dc.structure import to_json
 from jax3dc.viewer.page import ASSETS_DIR
-from viewer_cases import MARKUP_NAME, cabinet, png, verdict
+from viewer_cases import MARKUP_NAME, REASON, WARNING, cabinet, png, verdict
 
 VENDOR = Path(__file__).resolve().parents[2] / "jax3dc" / "viewer" / "static" / "vendor"
 
@@ -28,7 +28,7 @@ def export_folder(folder: Path) -> Path:
     structure, parts = cabinet()
     folder.mkdir()
     (folder / "object.glb").write_bytes(gltf_bytes(structure, parts, 0.5))
-    (folder / "physics.json").write_text(json.dumps(verdict()))
+    (folder / "physics.json").write_text(json.dumps(verdict().to_json()))
     (folder / "image.png").write_bytes(png((200, 60, 40)))
     return folder
 
@@ -45,6 +45,9 @@ def test_folder_with_glb_gives_page_with_verdict_and_neighbours(tmp_path: Path, 
     assert by_id[4]["joint"]["range"] == pytest.approx([0.0, 0.2]) and by_id[4]["joint"]["range_unit"] == "m"
     assert by_id[2]["name"] == MARKUP_NAME and "<img" not in page.read_text().split("jax3dc-data")[1]
     assert data["verdict"]["joints"]["2"]["ok"] is False and data["scale_m_per_nu"] == 0.5
+    assert data["verdict"]["joints"] == {"2": {"ok": False, "reasons": [REASON], "warnings": []},
+                                         "3": {"ok": True, "reasons": [], "warnings": [WARNING]},
+                                         "4": {"ok": True, "reasons": [], "warnings": []}}
     assert [i["caption"] for i in data["images"]] == ["image I"]  # no seg.png there
     assert data["relations"] == [{"type": "symmetric", "a": 2, "b": 3, "plane": "yz"}]
     for name in ("three.bundle.min.js", "viewer.js", "viewer.css", "LICENSE-three.txt"):
@@ -78,6 +81,7 @@ def test_vendored_bundle_is_the_one_recorded(tmp_path: Path) -> None:
     ("two_glbs", "several .glb files (a.glb, b.glb): name one of them"),
     ("foreign_glb", "no node carries a part_id extra"),
     ("bad_verdict", "physics.json: not JSON"),
+    ("reasons_only", "physics.json: not a physics verdict (KeyError: 'findings')"),
     ("empty", "no .glb file and no structure.json with parts/"),
 ])
 def test_bad_inputs_are_one_line_errors(tmp_path: Path, capsys, case: str, message: str) -> None:
@@ -92,6 +96,9 @@ def test_bad_inputs_are_one_line_errors(tmp_path: Path, capsys, case: str, messa
     elif case == "bad_verdict":
         export_folder(folder)
         (folder / "physics.json").write_text("{nope")
+    elif case == "reasons_only":  # a verdict without its findings cannot be typed again
+        export_folder(folder)
+        (folder / "physics.json").write_text(json.dumps({k: v for k, v in verdict().to_json().items() if k != "findings"}))
     elif case == "empty":
         folder.mkdir()
     assert main(["view", str(folder), "--no-open"]) == 1

@@ -9,13 +9,14 @@ import numpy as np
 import trimesh
 from PIL import Image
 
+from jax3dc.physics.findings import WARNING as WARNS, Finding, Verdict
 from jax3dc.structure.schema import Joint, Material, Node, Relation, Structure
 
 MARKUP_NAME = '<img src=x onerror="window.injected=1">door'
 HINGE, SLIDE, FLAGGED = 3, 4, 2  # the right door, the drawer, the left door
 MOVES_WITH = {HINGE: [3], SLIDE: [4, 5]}  # what each joint carries
 REASON = "penetrates part 1 at q=-1.571"
-WARNING = "limit past contact: hi (stops at q=1.42)"  # a ground-truth style warning on the hinge
+WARNING = "limit past contact: hi (stops at q=1.420)"  # a ground-truth style warning on the hinge
 
 
 def box(extents, centre) -> trimesh.Trimesh:
@@ -43,11 +44,11 @@ def cabinet() -> tuple[Structure, dict[int, trimesh.Trimesh]]:
     return Structure(materials, nodes, (Relation("symmetric", 2, 3, "yz"),)), parts
 
 
-def verdict() -> dict:
-    """A physics.json that flags the left door and warns on the right one."""
-    return {"ok": False, "checks": {"rest": [], "gravity": []},
-            "joints": {"2": {"ok": False, "reasons": [REASON]}, "3": {"ok": True, "reasons": [], "warnings": [WARNING]},
-                       "4": {"ok": True, "reasons": []}}}
+def verdict() -> Verdict:
+    """A verdict that flags the left door (REASON) and warns on the right one (WARNING)."""
+    return Verdict((FLAGGED, HINGE, SLIDE), (
+        Finding("penetration", joints=(FLAGGED,), parts=(1,), depth=0.05, state=((FLAGGED, -1.571),)),
+        Finding("limit", WARNS, joints=(HINGE,), reachable=1.42, limit="hi")))
 
 
 def png(colour: tuple[int, int, int], size: int = 48) -> bytes:
