@@ -282,19 +282,3 @@ def prefill_in_chunks(model, input_ids, attention_mask, pixel_values, image_grid
         values=tuple(join(*layer) for layer in zip(*(p.cache.values for p in parts))),
         valid=join(*(p.cache.valid for p in parts)))
     return Prefilled(join(*(p.logits for p in parts)), cache, join(*(p.rope_deltas for p in parts)))
-
-
-def generate(model, input_ids, attention_mask=None, pixel_values=None, image_grid_thw=None,
-             config: GenerationConfig = GenerationConfig(), key: jax.Array | None = None,
-             prefill_rows: int | None = None, greedy=None, constraint: Constraint | None = None) -> Generated:
-    """Generate up to ``config.max_new_tokens`` tokens for each (left-padded) prompt row.
-
-    ``pixel_values`` / ``image_grid_thw`` are the image processor's output for all images of
-    all rows, in row order. ``prefill_rows`` runs the prompt pass that many rows at a time.
-    """
-    if prefill_rows is not None and prefill_rows < np.shape(input_ids)[0]:
-        prefilled = prefill_in_chunks(model, input_ids, attention_mask, pixel_values, image_grid_thw,
-                                      config.max_new_tokens, prefill_rows)
-    else:
-        prefilled = prefill(model, input_ids, attention_mask, pixel_values, image_grid_thw, config.max_new_tokens)
-    return decode(model, prefilled, config, key, greedy, constraint)

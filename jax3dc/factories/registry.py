@@ -120,18 +120,6 @@ def _run(category: str, draws: Draws) -> Normalised:
     return writer.finish()
 
 
-def build_normalised(category: str, seed: int) -> Normalised:
-    """Runs one factory: program, parts, structure and the relations the factory intended."""
-    return _run(category, seeded_draws(category, seed))
-
-
-def sample_parameters(category: str, seed: int) -> Parameters:
-    """The parameters `generate_object(category, seed)` uses, without building any mesh."""
-    draws = seeded_draws(category, seed)
-    FACTORIES[category].build(ProgramWriter(), draws)
-    return draws.parameters()
-
-
 def _generated(out: Normalised, category: str, object_id_: str, parameters: Parameters) -> GeneratedObject:
     return GeneratedObject(
         category=category,

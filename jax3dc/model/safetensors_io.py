@@ -39,15 +39,6 @@ def checkpoint_files(directory: str | Path) -> list[Path]:
     return files
 
 
-def tensor_names(path: str | Path) -> list[str]:
-    """The tensor names of one safetensors file."""
-    try:
-        with safe_open(str(path), framework="numpy") as f:
-            return list(f.keys())
-    except (SafetensorError, OSError) as e:
-        raise InputFileError(str(path), f"not a readable safetensors file ({e})") from None
-
-
 def iter_tensors(directory: str | Path) -> Iterator[tuple[str, np.ndarray]]:
     """(name, array) of every tensor of a checkpoint directory, one at a time."""
     for path in checkpoint_files(directory):

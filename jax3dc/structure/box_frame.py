@@ -100,13 +100,6 @@ def to_box_frame(structure: Structure, boxes: Mapping[int, Box], frame: PivotFra
     return _map_joints(structure, boxes, lambda j, box: pivot_to_box(j.pivot, j.axis, box, frame.floor))
 
 
-def from_box_frame(structure: Structure, boxes: Mapping[int, Box], frame: PivotFrame) -> Structure:
-    """The SPEC §2 structure of one whose pivots are in the box frame."""
-    if frame.name == "absolute":
-        return structure
-    return _map_joints(structure, boxes, lambda j, box: pivot_from_box(j.pivot, box, frame.floor))
-
-
 def target_in_frame(target: str, boxes: Mapping[int, Box], frame: PivotFrame) -> str:
     """A canonical SPEC §2 target as the model of ``frame`` is taught to write it."""
     if frame.name == "absolute":

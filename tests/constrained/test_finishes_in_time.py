@@ -17,13 +17,14 @@ from flax import nnx
 
 from jax3dc.constrained import program, program_constraint, structure, structure_constraint
 from jax3dc.errors import StructureError
-from jax3dc.generate import GenerationConfig, generate
+from jax3dc.generate import GenerationConfig
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.program.interpreter import parse_program
 from jax3dc.release import MODEL_DIR
 from jax3dc.structure import parse_structure
+from tests.generation import generate
 
 VOCAB = 1408
 LOOP = ',{"type":"symmetric","a":2,"b":9,"plane":"xz"}'  # what the 2-step model of issue 50 repeated

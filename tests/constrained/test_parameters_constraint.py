@@ -13,13 +13,15 @@ from flax import nnx
 
 from jax3dc.constrained import parameters_constraint
 from jax3dc.constrained.parameters import advance, allowed, initial_rows, longest_text, parameters_tables
-from jax3dc.factories.registry import SCHEMAS, run_parameters, sample_parameters
-from jax3dc.generate import GenerationConfig, generate
+from jax3dc.factories.registry import SCHEMAS, run_parameters
+from jax3dc.generate import GenerationConfig
 from jax3dc.model.config import Qwen3VLConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.parameters import format_parameters, parse_parameters
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.release import MODEL_DIR
+from tests.factory_samples import sample_parameters
+from tests.generation import generate
 
 VOCAB = 1408
 

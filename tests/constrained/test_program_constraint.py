@@ -15,11 +15,12 @@ from flax import nnx
 from jax3dc.constrained import program_constraint
 from jax3dc.constrained.program import advance, allowed, initial_rows, program_tables
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.generate import GenerationConfig, generate
+from jax3dc.generate import GenerationConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.program.interpreter import parse_program
 from jax3dc.release import MODEL_DIR
+from tests.generation import generate
 
 OK = ("mat1 = material('Wood', 'oak')\n"
       "box1 = box((1, 0.5, 0.25), center=(0, 0, 0.125))\n"
@@ -30,9 +31,9 @@ OK = ("mat1 = material('Wood', 'oak')\n"
 
 
 def _factory_programs(seeds: int) -> list[tuple[str, str]]:
-    from jax3dc.factories.registry import FACTORIES, build_normalised
+    from jax3dc.factories.registry import FACTORIES, generate_object
 
-    return [(f"{c}/{s}", build_normalised(c, s).program_text) for c in FACTORIES for s in range(seeds)]
+    return [(f"{c}/{s}", generate_object(c, s).program_text) for c in FACTORIES for s in range(seeds)]
 
 
 @jax.jit

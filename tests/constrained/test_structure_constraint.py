@@ -16,11 +16,12 @@ from jax3dc.constrained import prompt_counts, structure_constraint
 from jax3dc.constrained.structure import advance, allowed, initial_rows, structure_tables
 from jax3dc.errors import StructureError
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.generate import GenerationConfig, generate
+from jax3dc.generate import GenerationConfig
 from jax3dc.model.qwen3_vl import Qwen3VL
 from jax3dc.processing.tokenizer import load_tokenizer
 from jax3dc.release import MODEL_DIR
 from jax3dc.structure import parse_structure, to_json
+from tests.generation import generate
 
 
 def _prompt(n: int, joints: int | None) -> str:

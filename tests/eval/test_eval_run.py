@@ -241,7 +241,8 @@ def test_batched_windowed_generation_equals_plain_generate_per_row(shards: Path,
     from data_pipeline.shards import shard_paths
     from eval.records import read_records
     from jax3dc.sampler import DecodeOptions, Sampler
-    from jax3dc.generate import GenerationConfig, generate
+    from jax3dc.generate import GenerationConfig
+    from tests.generation import generate
     from jax3dc.processing.processor import preprocess_images
 
     generator = Sampler.load(checkpoint, dtype="float32")

@@ -14,9 +14,10 @@ from data_pipeline.record import encode_record
 from eval.metrics.parameters import score_parameters, summarise
 from eval.metrics.part_matching import match_parts, matched_iou
 from jax3dc.cli import main
-from jax3dc.factories.registry import SCHEMAS, run_parameters, sample_parameters
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.parameters import format_parameters
 from tests.eval.test_eval_run import factory_record
+from tests.factory_samples import sample_parameters
 
 
 def _box(centre, size=(0.2, 0.2, 0.2)) -> trimesh.Trimesh:

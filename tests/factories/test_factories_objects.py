@@ -267,7 +267,7 @@ def _instance_groups(relations):
 @pytest.mark.parametrize("category", CATEGORIES)
 def test_extracted_relations_agree_with_the_design(category):
     """jax3dc.relations, reading only the meshes, finds exactly the copies the factory built."""
-    from jax3dc.factories.registry import build_normalised
+    from tests.factory_samples import build_normalised
 
     for seed in range(4):
         built = build_normalised(category, seed)

@@ -5,11 +5,12 @@ import numpy as np
 import pytest
 
 from jax3dc.factories import FACTORIES, generate_object
-from jax3dc.factories.registry import SCHEMAS, run_parameters, sample_parameters, seeded_draws
+from jax3dc.factories.registry import SCHEMAS, run_parameters, seeded_draws
 from jax3dc.factories.writer import ProgramWriter
 from jax3dc.parameters import (Chance, Choice, Count, Draws, Number, ParameterError, Parameters, Schema,
                                format_parameters, parse_parameters)
 from jax3dc.structure import to_json
+from tests.factory_samples import sample_parameters
 
 CATEGORIES = sorted(FACTORIES)
 

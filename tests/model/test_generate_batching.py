@@ -9,8 +9,9 @@ import pytest
 from flax import nnx
 
 from jax3dc.model.config import Qwen3VLConfig
-from jax3dc.generate import GenerationConfig, generate, left_pad, sample_token, split_rows
+from jax3dc.generate import GenerationConfig, left_pad, sample_token, split_rows
 from jax3dc.model.qwen3_vl import Qwen3VL
+from tests.generation import generate
 
 NEW = 12
 

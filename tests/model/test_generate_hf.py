@@ -17,9 +17,10 @@ import jax  # noqa: E402
 from PIL import Image  # noqa: E402
 
 from jax3dc.model.config import Qwen3VLConfig  # noqa: E402
-from jax3dc.generate import GenerationConfig, generate  # noqa: E402
+from jax3dc.generate import GenerationConfig  # noqa: E402
 from jax3dc.model.params import load_pretrained  # noqa: E402
 from jax3dc.processing.processor import ImageProcessorConfig, image_token_counts, preprocess_image  # noqa: E402
+from tests.generation import generate  # noqa: E402
 
 NEW_TOKENS = 32
 

@@ -19,13 +19,14 @@ from PIL import Image
 from jax3dc import release
 from jax3dc.cli import main
 from jax3dc.errors import InputFileError
-from jax3dc.factories.registry import SCHEMAS, run_parameters, sample_parameters
+from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import load_parts
 from jax3dc.parameters import ParameterError, format_parameters, parse_parameters
 from jax3dc.predict import predict
 from jax3dc.predict import stage1 as stage1_module
 from jax3dc.predict.stage1 import PARAMETERS, ReaderKind, check_object_image, parse_stage1
 from predict_cases import CAMERA, write_image
+from tests.factory_samples import sample_parameters
 from tests.tiny_checkpoint import write_tiny_release_vocab_checkpoint
 
 GOOD = format_parameters(sample_parameters("stapler", 0), SCHEMAS["stapler"])
