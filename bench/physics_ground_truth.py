@@ -103,7 +103,9 @@ def main() -> None:
     warnings.filterwarnings("ignore")
 
     categories = [c for c in args.categories.split(",") if c] or sorted(FACTORIES)
-    fixtures = sorted(d for d in Path(args.fixtures).iterdir() if d.is_dir()) if args.fixtures and Path(args.fixtures).is_dir() else []
+    if args.fixtures and not Path(args.fixtures).is_dir():  # a missing folder would drop the fixtures unseen
+        parser.error(f"--fixtures {args.fixtures}: no such folder (pass --fixtures '' for factory objects only)")
+    fixtures = sorted(d for d in Path(args.fixtures).iterdir() if d.is_dir()) if args.fixtures else []
     objects = list(factory_objects(categories, range(args.seeds))) + list(imported_objects(fixtures))
     t0 = time.perf_counter()
     measure = functools.partial(_measure, mutations=not args.no_mutations, backend=args.backend)
