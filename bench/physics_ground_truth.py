@@ -55,7 +55,7 @@ def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str],
     def on_truth(obj, verdict: Verdict) -> None:
         verdicts.update(verdict=verdict.to_json(), seconds=round(time.perf_counter() - t0, 2))
         for part in verdict.joint_parts:
-            reasons = [describe(f) for f in verdict.joint_findings(part, FAILURE)]
+            reasons = verdict.joint_reasons(part, FAILURE)
             if reasons:
                 flagged.append(f"  {obj.name} joint {part}: {'; '.join(reasons)}")
                 details.append(json.dumps({"kind": "false alarm", "object": obj.name, "part": int(part),

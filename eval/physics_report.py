@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from jax3dc.errors import InputFileError
-from jax3dc.physics.findings import FAILURE, WARNING, Verdict, describe
+from jax3dc.physics.findings import FAILURE, WARNING, Verdict
 
 
 def plot_penetration(object_id: str, curves: dict[int, Any], path: Path) -> None:
@@ -77,8 +77,8 @@ def write_report(results: list[dict[str, Any]], skipped: list[dict[str, Any]], o
         for r in results:
             verdict = r["verdict"]
             for part in verdict.joint_parts:
-                reasons = "; ".join(describe(f) for f in verdict.joint_findings(part, FAILURE))
-                warned = "; ".join(describe(f) for f in verdict.joint_findings(part, WARNING))
+                reasons = "; ".join(verdict.joint_reasons(part, FAILURE))
+                warned = "; ".join(verdict.joint_reasons(part, WARNING))
                 lines.append(f"| {r['object']} | {part} | {'no' if reasons else 'yes'} | {reasons} | {warned} |")
             if r.get("plot"):
                 lines.append(f"\n![{r['object']}]({r['plot']})\n")

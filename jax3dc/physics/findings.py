@@ -200,6 +200,11 @@ class Verdict:
         return tuple(f for f in self.findings if f.check not in OBJECT_CHECKS and f.joints[0] == part
                      and severity in (None, f.severity))
 
+    def joint_reasons(self, part: int, severity: Severity) -> list[str]:
+        """The reason strings of the joint's findings of ``severity`` (the JSON's "reasons" for
+        failures, "warnings" for warnings), for every place that shows them."""
+        return [describe(f) for f in self.joint_findings(part, severity)]
+
     def object_reasons(self) -> dict[str, list[str]]:
         """The reason strings of the object-level findings per key of the JSON's "checks": "rest" and
         "combinations" (each sorted), "gravity" when the test ran."""
@@ -219,9 +224,8 @@ class Verdict:
         typed "findings" themselves."""
         joints = {}
         for p in self.joint_parts:
-            reasons = [describe(f) for f in self.joint_findings(p, FAILURE)]
-            joints[str(p)] = {"ok": not reasons, "reasons": reasons,
-                              "warnings": [describe(f) for f in self.joint_findings(p, WARNING)]}
+            reasons = self.joint_reasons(p, FAILURE)
+            joints[str(p)] = {"ok": not reasons, "reasons": reasons, "warnings": self.joint_reasons(p, WARNING)}
         return {"ok": self.ok, "joints": joints, "checks": self.object_reasons(),
                 "findings": [f.to_json() for f in self.findings]}
 

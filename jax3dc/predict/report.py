@@ -21,7 +21,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from jax3dc.overlay import draw_overlay
 from jax3dc.palette import hex_colour, part_colour
-from jax3dc.physics.findings import FAILURE, WARNING, Verdict, describe
+from jax3dc.physics.findings import FAILURE, WARNING, Verdict
 from jax3dc.structure import Box, Joint, Structure
 
 PANEL = 512  # px, side of each image panel of report.png
@@ -74,8 +74,7 @@ def tree_lines(r: ReportInputs) -> list[tuple[int, int, str]]:
         if node.joint is not None:
             text += " | " + joint_text(node.joint)
             if pid in checked:
-                reasons = [describe(f) for f in r.verdict.joint_findings(pid, FAILURE)]
-                warnings = [describe(f) for f in r.verdict.joint_findings(pid, WARNING)]
+                reasons, warnings = r.verdict.joint_reasons(pid, FAILURE), r.verdict.joint_reasons(pid, WARNING)
                 text += " | physics: " + ("; ".join(reasons) if reasons else "ok")
                 if warnings:
                     text += " (warning: " + "; ".join(warnings) + ")"
