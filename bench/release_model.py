@@ -57,6 +57,19 @@ def _sets(overrides: list[str]) -> list[str]:
     return [x for o in overrides for x in ("--set", o)]
 
 
+def training_mix(data: str, real: str, real_weight: float, code_weight: float
+                 ) -> tuple[list[str], list[str], list[float]]:
+    """The training sources, their tasks and shares of examples: the procedural build, each
+    comma-separated folder of ``real`` (several imports of the pool, e.g. two looks of the same
+    objects, split ``real_weight`` equally) and, with ``code_weight``, the build again as the code task."""
+    reals = [d for d in real.split(",") if d]
+    datasets = [data, *reals] + ([data] if code_weight else [])
+    tasks = ["structure"] * (1 + len(reals)) + ["code"] * bool(code_weight)
+    weights = ([1 - (real_weight if reals else 0) - code_weight] + [real_weight / max(len(reals), 1)] * len(reals)
+               + ([code_weight] if code_weight else []))
+    return datasets, tasks, weights
+
+
 def _last_step(train_dir: Path) -> int:
     log = train_dir / "metrics.jsonl"
     if not log.exists():
@@ -103,7 +116,8 @@ def main() -> None:
     p.add_argument("--appearance", default="varied", help="`data build --appearance` (empty: the build's default)")
     p.add_argument("--image-size", type=int, default=224)
     p.add_argument("--vocab", type=int, default=2048)
-    p.add_argument("--real", default="", help="shards of imported real training objects (train split)")
+    p.add_argument("--real", default="", help="shards of imported real training objects (train split); several "
+                   "folders, comma-separated (e.g. two looks of the same objects), share --real-weight equally")
     p.add_argument("--real-weight", type=float, default=0.1, help="share of training examples from --real")
     p.add_argument("--heldout", default="", help="shards of the real pool's held-out fifth (bench.real_split), never "
                    "trained on, scored by bench.real_objects")
@@ -156,10 +170,7 @@ def main() -> None:
         if minutes < 1:
             print("[release] no time left for training in this call; run it again", flush=True)
             return
-        datasets = [str(data)] + ([a.real] if a.real else []) + ([str(data)] if a.code_weight else [])
-        tasks = ["structure"] * (1 + bool(a.real)) + ["code"] * bool(a.code_weight)
-        structure_share = 1 - (a.real_weight if a.real else 0) - a.code_weight
-        weights = [structure_share] + ([a.real_weight] if a.real else []) + ([a.code_weight] if a.code_weight else [])
+        datasets, tasks, weights = training_mix(str(data), a.real, a.real_weight, a.code_weight)
         overrides = [f"data={','.join(datasets)}", f"val_data={data}", f"image_size={a.image_size}", f"seq_len={a.seq_len}",
                      f"batch_size={a.batch}", "grad_accum=1", f"lr={a.lr}", f"warmup_steps={min(200, a.steps // 20)}",
                      f"steps={a.steps}", f"time_limit_min={minutes:.2f}", "freeze=", f"loader_workers={int(workers) - 2}",
