@@ -18,6 +18,11 @@
 set -uo pipefail
 R=/tmp/r5
 export MUJOCO_GL=egl PYTHONUNBUFFERED=1 PYTHONPATH=$R/site LD_LIBRARY_PATH=$R/gl/usr/lib/x86_64-linux-gnu:${LD_LIBRARY_PATH:-}
+snapshot() {  # one copy of the tree per host, taken by the first of build / start, run from there after
+  [ -d $R/src ] || { mkdir -p $R/src && tar cf - --exclude=./.git --exclude=./.carry --exclude=./.whl --exclude=./.gl . \
+      | tar xf - -C $R/src; }
+  cd $R/src
+}
 case "$1" in
 split)  # run.sh split NAME... : .carry/NAME -> .carry/parts/NAME.0, NAME.1, ...
   shift; mkdir -p .carry/parts
@@ -46,13 +51,13 @@ setup)
   [ -d $R/gl ] || for d in .gl/*.deb; do dpkg -x "$d" $R/gl; done  # GLVND's libEGL: the image has none
   du -sh $R/carry/* ;;
 build)
-  mkdir -p $R/src && tar cf - --exclude=./.git --exclude=./.carry --exclude=./.whl --exclude=./.gl . | tar xf - -C $R/src && cd $R/src
+  snapshot
   ( python3 -m jax3dc.cli data build --out $R/data --objects 8500 --scenes ${SCENES:-3000} --views 2 \
         --augment --size 224 --appearance varied --workers 16 --quiet > $R/build.log 2>&1; echo built >> $R/build.log
   ) < /dev/null > /dev/null 2>&1 &
   disown; echo "build started" ;;
 start)
-  mkdir -p $R/src && tar cf - --exclude=./.git --exclude=./.carry --exclude=./.whl --exclude=./.gl . | tar xf - -C $R/src && cd $R/src
+  snapshot
   export XLA_PYTHON_CLIENT_MEM_FRACTION=0.25
   while ! grep -q built $R/build.log 2>/dev/null; do sleep 5; done
   c=$R/carry
