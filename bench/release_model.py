@@ -65,8 +65,8 @@ def training_mix(data: str, real: str, real_weight: float, code_weight: float
     reals = [d for d in real.split(",") if d]
     datasets = [data, *reals] + ([data] if code_weight else [])
     tasks = ["structure"] * (1 + len(reals)) + ["code"] * bool(code_weight)
-    weights = ([1 - (real_weight if reals else 0) - code_weight] + [real_weight / max(len(reals), 1)] * len(reals)
-               + ([code_weight] if code_weight else []))
+    real_shares = [real_weight / len(reals)] * len(reals) if reals else []
+    weights = [1 - sum(real_shares) - code_weight, *real_shares] + ([code_weight] if code_weight else [])
     return datasets, tasks, weights
 
 
