@@ -10,9 +10,11 @@
   3. package   OUT/stage1 (stage1_net.json + float16 model.safetensors), its size printed
   4. evaluate  the packaged folder through `load_reader`'s path on the test split: every text
                runs through the factory and is scored by eval.metrics.parameters (texts that run,
-               category, part count exact, parts matched one-to-one by box IoU, Chamfer); also the
-               reader's seconds per image. OUT/summary.json holds the numbers, OUT/test.jsonl the
-               per-object scores, and the last lines print the table.
+               category, part count exact, parts matched one-to-one by box IoU, Chamfer), over all
+               test records and per build; also the reader's seconds per image. With --compare
+               FOLDER, that network (e.g. the shipped one) is scored on the same records in the same
+               run, each at its own image size. OUT/summary.json holds the numbers, OUT/test.jsonl
+               the per-object scores, and the last lines print the table.
 With --release DIR the packaged folder is also copied there (e.g. jax3dc/release/stage1).
 """
 
@@ -39,18 +41,34 @@ from jax3dc.stage1_net import OutputLayout, Stage1Net, Stage1NetConfig, load_net
 from train.stage1_net import TrainConfig, accuracy, targets, train
 
 
-def _load_split_images(folders: list[Path], size: int) -> dict[str, tuple[list[str], list[np.ndarray], list[str]]]:
-    """split -> (keys, network images as uint8, parameter texts) of the records that carry parameters."""
-    out: dict[str, tuple[list, list, list]] = defaultdict(lambda: ([], [], []))
-    for record in (r for folder in folders for r in read_dataset(folder)):
-        if not record.parameters:
-            continue
-        rgb = np.asarray(Image.open(io.BytesIO(record.image_png)).convert("RGB"))
-        keys, images, texts = out[record.meta.get("split", "train")]
-        keys.append(record.key)
-        images.append((network_image(rgb, size) * 255.0 + 0.5).astype(np.uint8))
-        texts.append(record.parameters)
+def _load_split_images(folders: list[Path], size: int, only: str | None = None
+                       ) -> dict[str, tuple[list[str], list[np.ndarray], list[str], list[int]]]:
+    """split -> (keys, network images as uint8, parameter texts, build index) of the records that
+    carry parameters (of split ``only`` when given)."""
+    out: dict[str, tuple[list, list, list, list]] = defaultdict(lambda: ([], [], [], []))
+    for build, folder in enumerate(folders):
+        for record in read_dataset(folder):
+            split = record.meta.get("split", "train")
+            if not record.parameters or (only is not None and split != only):
+                continue
+            rgb = np.asarray(Image.open(io.BytesIO(record.image_png)).convert("RGB"))
+            keys, images, texts, builds = out[split]
+            keys.append(record.key)
+            images.append((network_image(rgb, size) * 255.0 + 0.5).astype(np.uint8))
+            texts.append(record.parameters)
+            builds.append(build)
     return dict(out)
+
+
+def _score(network, keys: list[str], images: list[np.ndarray], texts: list[str], batch: int = 64
+           ) -> tuple[list, list[str], float]:
+    """Scores, predicted texts and reader seconds per image of ``network`` on the given records."""
+    t = time.perf_counter()
+    predicted = [text for lo in range(0, len(keys), batch)
+                 for text in network.read(np.asarray(images[lo:lo + batch], np.float32) / 255.0)]
+    read_s = (time.perf_counter() - t) / max(len(keys), 1)
+    scores = [score_parameters(k, ref, text, SCHEMAS, run_parameters) for k, ref, text in zip(keys, texts, predicted)]
+    return scores, predicted, read_s
 
 
 def main() -> None:
@@ -64,6 +82,8 @@ def main() -> None:
     p.add_argument("--image-size", type=int, default=96, help="image side the network reads")
     p.add_argument("--widths", type=int, nargs="+", default=[32, 48, 96, 128], help="channels of the residual blocks")
     p.add_argument("--hidden", type=int, default=192, help="width of the layer the heads read")
+    p.add_argument("--blocks", type=int, default=1, help="residual blocks per width")
+    p.add_argument("--compare", default="", help="a network folder to score on the same test records")
     p.add_argument("--steps", type=int, default=3000)
     p.add_argument("--minutes", type=float, default=10.0, help="training stops after this many minutes")
     p.add_argument("--batch", type=int, default=64)
@@ -85,12 +105,12 @@ def main() -> None:
     t = time.perf_counter()
     splits = _load_split_images(folders, a.image_size)
     layout = OutputLayout.of(SCHEMAS)
-    sets = {name: targets(images, texts, layout, SCHEMAS) for name, (_, images, texts) in splits.items()}
+    sets = {name: targets(images, texts, layout, SCHEMAS) for name, (_, images, texts, _) in splits.items()}
     print(f"[stage1_net] records: {({k: len(v) for k, v in sets.items()})} loaded in {time.perf_counter() - t:.0f} s",
           flush=True)
 
     model = Stage1Net(Stage1NetConfig.for_layout(layout, image_size=a.image_size, widths=tuple(a.widths),
-                                                       hidden=a.hidden), nnx.Rngs(a.seed))
+                                                       hidden=a.hidden, blocks=a.blocks), nnx.Rngs(a.seed))
     config = TrainConfig(steps=a.steps, batch=a.batch, lr=a.lr, time_limit_s=a.minutes * 60, seed=a.seed)
     t = time.perf_counter()
     log = train(model, sets["train"], layout, config, on_log=lambda row: print(f"[stage1_net] {row}", flush=True))
@@ -108,15 +128,25 @@ def main() -> None:
     print(f"[stage1_net] packaged {package}: weights {weights / 2**20:.2f} MiB", flush=True)
 
     network = load_network(package)  # score what ships (float16 weights), not the training copy
-    keys, images, texts = splits["test"]
+    keys, images, texts, builds = splits["test"]
     n = len(keys) if a.eval_limit <= 0 else min(a.eval_limit, len(keys))
     t = time.perf_counter()
-    predicted = [network.read(np.asarray(images[i], np.float32)[None] / 255.0)[0] for i in range(n)]
-    read_s = (time.perf_counter() - t) / max(n, 1)
-    t = time.perf_counter()
-    scores = [score_parameters(keys[i], texts[i], predicted[i], SCHEMAS, run_parameters) for i in range(n)]
+    scores, predicted, read_s = _score(network, keys[:n], images[:n], texts[:n])
     score_s = time.perf_counter() - t
     metrics = summarise(scores)
+    per_build = {str(folders[b]): summarise([s for s, sb in zip(scores, builds) if sb == b])
+                 for b in sorted(set(builds[:n]))}
+    compared = {}
+    if a.compare:
+        other = load_network(a.compare)
+        size = other.model.config.image_size
+        own = _load_split_images(folders, size, only="test")["test"] if size != a.image_size else splits["test"]
+        index = {k: i for i, k in enumerate(own[0])}
+        chosen = [index[k] for k in keys[:n]]
+        other_scores, _, _ = _score(other, keys[:n], [own[1][i] for i in chosen], texts[:n])
+        compared = {"folder": a.compare, "test": summarise(other_scores),
+                    "per_build": {str(folders[b]): summarise([s for s, sb in zip(other_scores, builds) if sb == b])
+                                  for b in sorted(set(builds[:n]))}}
     with (out / "test.jsonl").open("w", encoding="utf-8") as f:
         for s, text, ref in zip(scores, predicted, texts):
             f.write(json.dumps({**s.to_dict(), "predicted": text, "reference": ref}, separators=(",", ":")) + "\n")
@@ -126,6 +156,7 @@ def main() -> None:
     summary = {"args": vars(a), "records": {k: len(v) for k, v in sets.items()}, "train_seconds": round(train_s, 1),
                "train_log": log, "held_out": held_out, "weights_bytes": weights,
                "reader_seconds_per_image": round(read_s, 4), "scoring_seconds": round(score_s, 1), "test": metrics,
+               "test_per_build": per_build, "compared": compared,
                "test_per_category": {c: summarise(v) for c, v in sorted(per_category.items())}}
     (out / "summary.json").write_text(json.dumps(summary, indent=1), encoding="utf-8")
     if a.release:
@@ -133,6 +164,8 @@ def main() -> None:
         print(f"[stage1_net] copied to {a.release}", flush=True)
     print(f"[stage1_net] reader {read_s * 1000:.1f} ms/image; wrote {out / 'summary.json'}")
     print("\n## stage-1 image network, procedural test split\n" + table("stage1_net", metrics), flush=True)
+    if compared:
+        print(table(Path(a.compare).name, compared["test"]).splitlines()[-1], flush=True)
 
 
 if __name__ == "__main__":

@@ -5,7 +5,9 @@ entry's range; each discrete value's class. Loss: cross-entropy of the category,
 true category's values only, the mean cross-entropy of the discrete values and a weighted
 smooth-L1 of the numbers (other categories' outputs get no gradient). Images are shifted by a few
 pixels and their brightness jittered each step, which the small build needs against overfitting.
-One jitted step, optax AdamW with warm-up and cosine decay, bounded by steps and wall time.
+The set is put on the device once and each jitted step gathers and augments its own batch there
+(on a GPU the host would otherwise be the bottleneck); optax AdamW with warm-up and cosine decay,
+bounded by steps and wall time.
 """
 
 from __future__ import annotations
@@ -82,17 +84,21 @@ class TrainConfig:
     seed: int = 0
 
 
-def augment(images: np.ndarray, rng: np.random.Generator, shift: int) -> np.ndarray:
-    """Float images [0, 1]: each shifted by up to ``shift`` px (edges repeated) and its brightness,
-    contrast and colour balance jittered a little."""
+def augment(images: jax.Array, key: jax.Array, shift: int) -> jax.Array:
+    """uint8 images [B, S, S, 3] -> floats in [0, 1], each shifted by up to ``shift`` px (edges
+    repeated) and its brightness, contrast and colour balance jittered a little. Runs inside the
+    jitted step, so an accelerator never waits on the host for its batch."""
     b, s = images.shape[:2]
-    padded = np.pad(images, ((0, 0), (shift, shift), (shift, shift), (0, 0)), mode="edge")
-    dy, dx = rng.integers(0, 2 * shift + 1, size=(2, b))
-    out = np.stack([padded[i, dy[i]:dy[i] + s, dx[i]:dx[i] + s] for i in range(b)]).astype(np.float32) / 255.0
-    gain = rng.uniform(0.8, 1.2, (b, 1, 1, 1)) * rng.uniform(0.93, 1.07, (b, 1, 1, 3))
+    k_shift, k_gain, k_colour, k_contrast = jax.random.split(key, 4)
+    x = images.astype(jnp.float32) / 255.0
+    padded = jnp.pad(x, ((0, 0), (shift, shift), (shift, shift), (0, 0)), mode="edge")
+    offsets = jax.random.randint(k_shift, (b, 2), 0, 2 * shift + 1)
+    out = jax.vmap(lambda im, o: jax.lax.dynamic_slice(im, (o[0], o[1], 0), (s, s, 3)))(padded, offsets)
+    gain = (jax.random.uniform(k_gain, (b, 1, 1, 1), minval=0.8, maxval=1.2)
+            * jax.random.uniform(k_colour, (b, 1, 1, 3), minval=0.93, maxval=1.07))
     mean = out.mean(axis=(1, 2, 3), keepdims=True)
-    contrast = rng.uniform(0.8, 1.2, (b, 1, 1, 1))
-    return np.clip((out - mean) * contrast + mean * gain, 0.0, 1.0).astype(np.float32)
+    contrast = jax.random.uniform(k_contrast, (b, 1, 1, 1), minval=0.8, maxval=1.2)
+    return jnp.clip((out - mean) * contrast + mean * gain, 0.0, 1.0)
 
 
 def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: float) -> tuple[jax.Array, dict]:
@@ -109,35 +115,52 @@ def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: f
     return loss, {"loss": loss, "category_ce": ce_cat, "discrete_ce": ce_disc, "number_l1": l_num}
 
 
+def learning_rate(config: TrainConfig, step: int, progress: float) -> float:
+    """Linear warm-up over ``config.warmup`` steps, then a cosine to 2 % of the peak over the run's
+    progress: the larger of the share of steps done and the share of the time limit used, so a run
+    that its time limit ends still finishes its decay instead of stopping at a high rate."""
+    warmup = min(config.warmup, config.steps // 2)
+    if step <= warmup:
+        return config.lr * step / max(warmup, 1)
+    cosine = 0.5 * (1.0 + np.cos(np.pi * min(max(progress, 0.0), 1.0)))
+    return config.lr * (0.02 + 0.98 * cosine)
+
+
 def train(model: Stage1Net, data: Targets, layout: OutputLayout, config: TrainConfig,
           on_log: Callable[[dict], None] = print) -> list[dict]:
     """Trains ``model`` in place; returns the logged rows (step, seconds, losses)."""
-    warmup = min(config.warmup, config.steps // 2)
-    schedule = optax.warmup_cosine_decay_schedule(0.0, config.lr, warmup, config.steps, config.lr * 0.02)
-    optimizer = nnx.Optimizer(model, optax.adamw(schedule, weight_decay=config.weight_decay), wrt=nnx.Param)
+    optimizer = nnx.Optimizer(model, optax.inject_hyperparams(optax.adamw)(learning_rate=config.lr,
+                              weight_decay=config.weight_decay), wrt=nnx.Param)
     class_mask = jnp.asarray(layout.class_mask())
 
+    # the whole set lives on the device once (an argument, not a constant baked into the program);
+    # a step gathers its batch by index there
+    arrays = {f: jnp.asarray(getattr(data, f)) for f in data.__dataclass_fields__}
+
     @nnx.jit(donate_argnums=(0, 1))
-    def step(model: Stage1Net, optimizer: nnx.Optimizer, batch: dict) -> dict:
+    def step(model: Stage1Net, optimizer: nnx.Optimizer, arrays: dict, index: jax.Array, key: jax.Array,
+             lr: jax.Array) -> dict:
+        batch = {f: a[index] for f, a in arrays.items()}
+        batch["images"] = augment(batch["images"], key, config.shift)
         grads, metrics = nnx.grad(_loss, has_aux=True)(model, batch, class_mask, config.number_weight)
+        optimizer.opt_state.hyperparams["learning_rate"][...] = lr
         optimizer.update(model, grads)
         return metrics
 
     rng = np.random.default_rng(config.seed)
+    keys = jax.random.split(jax.random.key(config.seed), config.steps)
     rows, running, start = [], [], time.perf_counter()
     order, at = rng.permutation(len(data)), 0
     for i in range(1, config.steps + 1):
         if at + config.batch > len(order):
             order, at = rng.permutation(len(data)), 0
-        part = data.take(order[at:at + config.batch])
+        index = jnp.asarray(order[at:at + config.batch], jnp.int32)
         at += config.batch
-        batch = {"images": augment(part.images, rng, config.shift), "category": part.category,
-                 "numbers": part.numbers, "number_mask": part.number_mask, "discrete": part.discrete,
-                 "discrete_mask": part.discrete_mask}
-        running.append(step(model, optimizer, batch))
         elapsed = time.perf_counter() - start
+        lr = learning_rate(config, i, max(i / config.steps, elapsed / config.time_limit_s))
+        running.append(step(model, optimizer, arrays, index, keys[i - 1], jnp.float32(lr)))
         if i % config.log_every == 0 or i == config.steps or elapsed > config.time_limit_s:
-            row = {"step": i, "seconds": round(elapsed, 1),
+            row = {"step": i, "seconds": round(elapsed, 1), "lr": round(lr, 6),
                    **{k: round(float(np.mean([float(m[k]) for m in running])), 4) for k in running[0]}}
             rows.append(row)
             on_log(row)

@@ -136,7 +136,7 @@ def load_network(folder: str | Path) -> Stage1Network:
         raise InputFileError(marker_path, f"bad config or schemas ({e})") from None
     layout = OutputLayout.of(schemas)
     if Stage1NetConfig.for_layout(layout, image_size=config.image_size, widths=config.widths,
-                                  reduced=config.reduced, hidden=config.hidden) != config:
+                                  reduced=config.reduced, hidden=config.hidden, blocks=config.blocks) != config:
         raise InputFileError(marker_path, "the config's head sizes do not match its schemas")
     weights = folder / str(marker.get("weights", WEIGHTS))
     if not weights.is_file():

@@ -30,6 +30,12 @@ class Stage1NetConfig:
     widths: tuple[int, ...] = (32, 48, 96, 128)
     reduced: int = 48
     hidden: int = 192
+    blocks: int = 1  # residual blocks per width: the first halves the map, the others keep it
+
+    def __post_init__(self) -> None:
+        if self.blocks < 1 or not self.widths:
+            raise ValueError(f"a stage-1 network needs widths and at least one block per width, got "
+                             f"widths={self.widths}, blocks={self.blocks}")
 
     @classmethod
     def for_layout(cls, layout: OutputLayout, **overrides: Any) -> "Stage1NetConfig":
@@ -41,7 +47,8 @@ class Stage1NetConfig:
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "Stage1NetConfig":
-        return cls(**{**data, "widths": tuple(data["widths"])})
+        """A marker's config; one written before ``blocks`` existed had one block per width."""
+        return cls(**{"blocks": 1, **data, "widths": tuple(data["widths"])})
 
 
 class ConvBlock(nnx.Module):
@@ -67,7 +74,10 @@ class Stage1Net(nnx.Module):
         self.config = config
         w = config.widths
         self.stem = nnx.Conv(3, w[0], (4, 4), strides=2, padding="SAME", rngs=rngs)
-        self.blocks = nnx.List([ConvBlock(a, b, 2, rngs) for a, b in zip((w[0],) + w[:-1], w)])
+        # one flat list (blocks.0, blocks.1, ...): with one block per width the tensor names are
+        # those of the folders written before ``blocks`` existed
+        self.blocks = nnx.List([ConvBlock(a if k == 0 else b, b, 2 if k == 0 else 1, rngs)
+                                for a, b in zip((w[0],) + w[:-1], w) for k in range(config.blocks)])
         # no global pooling: a drawer count or a door's hinge side is where things are, so the last
         # map is narrowed per position and read whole
         self.reduce = nnx.Conv(w[-1], config.reduced, (1, 1), rngs=rngs)
