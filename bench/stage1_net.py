@@ -16,6 +16,8 @@
                run, each at its own image size. OUT/summary.json holds the numbers, OUT/test.jsonl
                the per-object scores, and the last lines print the table.
 With --release DIR the packaged folder is also copied there (e.g. jax3dc/release/stage1).
+With --score FOLDER... nothing is built or trained: those network folders are scored on the test
+split of --data, each at its own image size, and OUT/score.json holds their rows overall and per build.
 """
 
 from __future__ import annotations
@@ -71,6 +73,28 @@ def _score(network, keys: list[str], images: list[np.ndarray], texts: list[str],
     return scores, predicted, read_s
 
 
+def score_folders(networks: list[str], folders: list[Path], out: Path) -> dict:
+    """Each network folder scored on the test records of ``folders`` (overall and per build)."""
+    rows, cache = {}, {}
+    for folder in networks:
+        network = load_network(folder)
+        size = network.model.config.image_size
+        if size not in cache:
+            cache[size] = _load_split_images(folders, size, only="test")["test"]
+        keys, images, texts, builds = cache[size]
+        scores, _, read_s = _score(network, keys, images, texts)
+        per_category: dict[str, list] = defaultdict(list)
+        for score in scores:
+            per_category[score.key.split("/")[0]].append(score)
+        rows[folder] = {"test": summarise(scores), "reader_seconds_per_image": round(read_s, 4),
+                        "per_build": {str(folders[b]): summarise([s for s, sb in zip(scores, builds) if sb == b])
+                                      for b in sorted(set(builds))},
+                        "per_category": {c: summarise(v) for c, v in sorted(per_category.items())}}
+        print(table(folder, rows[folder]["test"]).splitlines()[-1], flush=True)
+    (out / "score.json").write_text(json.dumps(rows, indent=1), encoding="utf-8")
+    return rows
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/stage1_net")
@@ -84,6 +108,7 @@ def main() -> None:
     p.add_argument("--hidden", type=int, default=192, help="width of the layer the heads read")
     p.add_argument("--blocks", type=int, default=1, help="residual blocks per width")
     p.add_argument("--compare", default="", help="a network folder to score on the same test records")
+    p.add_argument("--score", nargs="+", default=[], help="only score these network folders on --data's test split")
     p.add_argument("--steps", type=int, default=3000)
     p.add_argument("--minutes", type=float, default=10.0, help="training stops after this many minutes")
     p.add_argument("--batch", type=int, default=64)
@@ -95,6 +120,9 @@ def main() -> None:
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     folders = [Path(d) for d in a.data] or [out / f"data-{seed}" for seed in range(len(a.objects))]
+    if a.score:
+        score_folders(a.score, folders, out)
+        return
     for seed, (folder, objects) in enumerate(zip(folders, a.objects if not a.data else [])):
         manifest = folder / "manifest.json"
         if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
@@ -119,9 +147,10 @@ def main() -> None:
     print(f"[stage1_net] trained {log[-1]['step']} steps in {train_s:.0f} s; held out: {held_out}", flush=True)
 
     package = out / "stage1"
-    recipe = (f"nice -n 10 python3 -m bench.stage1_net --objects {' '.join(map(str, a.objects))} "
-              f"--image-size {a.image_size} --widths {' '.join(map(str, a.widths))} --hidden {a.hidden} "
-              f"--steps {a.steps} --minutes {a.minutes}")
+    source = f"--data {' '.join(a.data)}" if a.data else f"--objects {' '.join(map(str, a.objects))}"
+    recipe = (f"python3 -m bench.stage1_net {source} --image-size {a.image_size} "
+              f"--widths {' '.join(map(str, a.widths))} --blocks {a.blocks} --hidden {a.hidden} --batch {a.batch} "
+              f"--lr {a.lr} --steps {a.steps} --minutes {a.minutes} --seed {a.seed}")
     save_network(package, model, SCHEMAS, notes={"recipe": recipe, "train_records": len(sets["train"]),
                                                  "steps": log[-1]["step"]})
     weights = (package / "model.safetensors").stat().st_size

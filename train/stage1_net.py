@@ -160,7 +160,7 @@ def train(model: Stage1Net, data: Targets, layout: OutputLayout, config: TrainCo
         lr = learning_rate(config, i, max(i / config.steps, elapsed / config.time_limit_s))
         running.append(step(model, optimizer, arrays, index, keys[i - 1], jnp.float32(lr)))
         if i % config.log_every == 0 or i == config.steps or elapsed > config.time_limit_s:
-            row = {"step": i, "seconds": round(elapsed, 1), "lr": round(lr, 6),
+            row = {"step": i, "seconds": round(elapsed, 1), "lr": round(float(lr), 6),
                    **{k: round(float(np.mean([float(m[k]) for m in running])), 4) for k in running[0]}}
             rows.append(row)
             on_log(row)

@@ -4,7 +4,7 @@
 # builds (seeds 4-7), then two networks trained side by side on the one GPU, each scored on every
 # test record beside the shipped release 2 (`bench.stage1_net --compare jax3dc/release/stage1`).
 # Host setup (wheels, entry points, EGL) is release 5's: docs/runs/release5_20261201/run.sh setup.
-# Usage: run.sh build | start | wait MINUTES | pack OUTDIR
+# Usage: run.sh all | build | start | wait MINUTES | pack OUTDIR
 set -uo pipefail
 R=/tmp/s1
 export MUJOCO_GL=egl PYTHONUNBUFFERED=1 PYTHONPATH=/tmp/r5/site LD_LIBRARY_PATH=/tmp/r5/gl/usr/lib/x86_64-linux-gnu:${LD_LIBRARY_PATH:-}
@@ -15,15 +15,23 @@ snapshot() {  # every call copies the tree afresh: long-lived processes run from
   cd $R/src
 }
 case "$1" in
-build)
+build)  # in its own session: a process left in the call's group ends with the call
   snapshot
-  ( for b in $BUILDS; do
+  setsid nohup bash -c "$R/src/docs/runs/stage1_net_20261202/run.sh build-here" < /dev/null > /dev/null 2>&1 &
+  echo "build started" ;;
+build-here)
+  snapshot
+  for b in $BUILDS; do
       IFS=: read seed n <<< "$b"
+      grep -q '"complete": true' $R/data-$seed/manifest.json 2>/dev/null && continue
+      rm -rf $R/data-$seed
       python3 -m jax3dc.cli data build --out $R/data-$seed --objects $n --seed $seed --scenes 0 --views 1 --size 128 \
           --workers 16 --appearance varied --quiet >> $R/build.log 2>&1 && echo "built $seed $(date +%s)" >> $R/build.log
-    done; echo "all built" >> $R/build.log
-  ) < /dev/null > /dev/null 2>&1 &
-  disown; date +%s > $R/build.start; echo "build started" ;;
+  done; echo "all built" >> $R/build.log ;;
+all)  # builds, then trains, in one session that outlives the call (run from the snapshot's copy)
+  snapshot; me=$R/src/docs/runs/stage1_net_20261202/run.sh
+  setsid nohup bash -c "$me build-here; $me start" < /dev/null > $R/all.log 2>&1 &
+  echo "all started" ;;
 start)  # run.sh start : waits for the builds, then trains both candidates at once
   snapshot
   while ! grep -q "all built" $R/build.log 2>/dev/null; do sleep 5; done
