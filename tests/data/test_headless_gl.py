@@ -19,6 +19,19 @@ def test_data_build_renders_without_display_or_mujoco_gl(tmp_path):
     assert list(out.glob("*.array_record")), "no shard written"
 
 
+def test_a_script_that_imports_evaluation_before_the_renderer_still_renders():
+    """A benchmark imports eval (which imports mujoco) long before it renders: importing the package
+    must already have chosen the headless backend."""
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY")}
+    script = ("import eval.pixels, mujoco\n"
+              "m = mujoco.MjModel.from_xml_string('<mujoco><worldbody><geom size=\"0.1\"/></worldbody></mujoco>')\n"
+              "r = mujoco.Renderer(m, 16, 16)\n"
+              "r.update_scene(mujoco.MjData(m))\n"
+              "assert r.render().shape == (16, 16, 3)\n")
+    r = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+
+
 def test_headless_backend_is_one_the_machine_has(monkeypatch):
     """Under MUJOCO_GL=egl without libEGL, ``import mujoco`` itself fails (a bare GPU machine), so
     the backend follows the installed libraries, and without any the variable stays unset."""
