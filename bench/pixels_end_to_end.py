@@ -53,6 +53,8 @@ def main() -> None:
                    help="the structure model's predictions for the same records on their own parts")
     p.add_argument("--out", default="runs/pixels", help="one predict folder per record, and summary.json")
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"))
+    p.add_argument("--stage1-model", default="", help="a stage-1 folder instead of the shipped one (e.g. a "
+                   "former release, for a comparison on the same records)")
     args = p.parse_args()
 
     out = Path(args.out)
@@ -62,7 +64,7 @@ def main() -> None:
     if not records:
         raise SystemExit(f"no plain {args.split} records with parameters in {args.data}")
     checkpoints = Checkpoints(args.dtype)
-    reader = load_reader(default_stage1_model(), ReaderSettings(checkpoints.get, 1024, True))
+    reader = load_reader(args.stage1_model or default_stage1_model(), ReaderSettings(checkpoints.get, 1024, True))
     references, results = [], []
     started = time.perf_counter()
     for k, record in enumerate(records):
