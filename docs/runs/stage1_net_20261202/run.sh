@@ -4,11 +4,13 @@
 # builds (seeds 4-7), then two networks trained side by side on the one GPU, each scored on every
 # test record beside the shipped release 2 (`bench.stage1_net --compare jax3dc/release/stage1`).
 # Host setup (wheels, entry points, EGL) is release 5's: docs/runs/release5_20261201/run.sh setup.
-# Usage: run.sh all | build | start | wait MINUTES | pack OUTDIR
+# Usage: [NEW=N EXTRA=K VIEWS=V MINUTES=M] run.sh all | build | start | wait MINUTES | pack OUTDIR
+# (release 3: NEW=3000 EXTRA=4 VIEWS=1 MINUTES=6.5)
 set -uo pipefail
 R=/tmp/s1
 export MUJOCO_GL=egl PYTHONUNBUFFERED=1 PYTHONPATH=/tmp/r5/site LD_LIBRARY_PATH=/tmp/r5/gl/usr/lib/x86_64-linux-gnu:${LD_LIBRARY_PATH:-}
-BUILDS="0:4000 1:7000 2:5000 3:4000 4:${NEW:-5000} 5:${NEW:-5000} 6:${NEW:-5000} 7:${NEW:-5000}"
+# EXTRA new builds (seeds 4, 5, ...) of NEW objects each; VIEWS 2 adds a view with one joint moved
+BUILDS="0:4000 1:7000 2:5000 3:4000 $(for k in $(seq 4 $((3 + ${EXTRA:-4}))); do echo -n "$k:${NEW:-5000} "; done)"
 snapshot() {  # every call copies the tree afresh: long-lived processes run from one copy of it
   [ -d $R/src ] || { mkdir -p $R/src && tar cf - --exclude=./.git --exclude=./.carry --exclude=./.whl --exclude=./.gl . \
       | tar xf - -C $R/src; }
@@ -25,7 +27,7 @@ build-here)
       IFS=: read seed n <<< "$b"
       grep -q '"complete": true' $R/data-$seed/manifest.json 2>/dev/null && continue
       rm -rf $R/data-$seed
-      python3 -m jax3dc.cli data build --out $R/data-$seed --objects $n --seed $seed --scenes 0 --views 1 --size 128 \
+      python3 -m jax3dc.cli data build --out $R/data-$seed --objects $n --seed $seed --scenes 0 --views ${VIEWS:-1} --size 128 \
           --workers 16 --appearance varied --quiet >> $R/build.log 2>&1 && echo "built $seed $(date +%s)" >> $R/build.log
   done; echo "all built" >> $R/build.log ;;
 all)  # builds, then trains, in one session that outlives the call (run from the snapshot's copy)
