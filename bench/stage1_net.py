@@ -109,6 +109,8 @@ def main() -> None:
     p.add_argument("--blocks", type=int, default=1, help="residual blocks per width")
     p.add_argument("--compare", default="", help="a network folder to score on the same test records")
     p.add_argument("--score", nargs="+", default=[], help="only score these network folders on --data's test split")
+    p.add_argument("--init", default="", help="start from this network folder's weights (fine-tuning); its "
+                   "config replaces --image-size, --widths, --blocks and --hidden")
     p.add_argument("--steps", type=int, default=3000)
     p.add_argument("--minutes", type=float, default=10.0, help="training stops after this many minutes")
     p.add_argument("--batch", type=int, default=64)
@@ -130,6 +132,12 @@ def main() -> None:
                    "--views", "1", "--size", str(a.render_size), "--workers", str(a.workers), "--appearance", "varied",
                    "--quiet"])
 
+    start = load_network(a.init) if a.init else None
+    if start is not None:
+        if start.schemas != SCHEMAS:
+            raise SystemExit(f"--init {a.init}: its schemas are not the factories' (a network of another version)")
+        c = start.model.config
+        a.image_size, a.widths, a.blocks, a.hidden = c.image_size, list(c.widths), c.blocks, c.hidden
     t = time.perf_counter()
     splits = _load_split_images(folders, a.image_size)
     layout = OutputLayout.of(SCHEMAS)
@@ -137,8 +145,9 @@ def main() -> None:
     print(f"[stage1_net] records: {({k: len(v) for k, v in sets.items()})} loaded in {time.perf_counter() - t:.0f} s",
           flush=True)
 
-    model = Stage1Net(Stage1NetConfig.for_layout(layout, image_size=a.image_size, widths=tuple(a.widths),
-                                                       hidden=a.hidden, blocks=a.blocks), nnx.Rngs(a.seed))
+    model = start.model if start is not None else Stage1Net(
+        Stage1NetConfig.for_layout(layout, image_size=a.image_size, widths=tuple(a.widths), hidden=a.hidden,
+                                   blocks=a.blocks), nnx.Rngs(a.seed))
     config = TrainConfig(steps=a.steps, batch=a.batch, lr=a.lr, time_limit_s=a.minutes * 60, seed=a.seed)
     t = time.perf_counter()
     log = train(model, sets["train"], layout, config, on_log=lambda row: print(f"[stage1_net] {row}", flush=True))
@@ -148,7 +157,7 @@ def main() -> None:
 
     package = out / "stage1"
     source = f"--data {' '.join(a.data)}" if a.data else f"--objects {' '.join(map(str, a.objects))}"
-    recipe = (f"python3 -m bench.stage1_net {source} --image-size {a.image_size} "
+    recipe = (f"python3 -m bench.stage1_net {source}{f' --init {a.init}' if a.init else ''} --image-size {a.image_size} "
               f"--widths {' '.join(map(str, a.widths))} --blocks {a.blocks} --hidden {a.hidden} --batch {a.batch} "
               f"--lr {a.lr} --steps {a.steps} --minutes {a.minutes} --seed {a.seed}")
     save_network(package, model, SCHEMAS, notes={"recipe": recipe, "train_records": len(sets["train"]),
