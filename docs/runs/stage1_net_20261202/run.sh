@@ -11,13 +11,13 @@ R=/tmp/s1
 export MUJOCO_GL=egl PYTHONUNBUFFERED=1 PYTHONPATH=/tmp/r5/site LD_LIBRARY_PATH=/tmp/r5/gl/usr/lib/x86_64-linux-gnu:${LD_LIBRARY_PATH:-}
 # EXTRA new builds (seeds 4, 5, ...) of NEW objects each; VIEWS 2 adds a view with one joint moved
 BUILDS="0:4000 1:7000 2:5000 3:4000 $(for k in $(seq 4 $((3 + ${EXTRA:-4}))); do echo -n "$k:${NEW:-5000} "; done)"
-snapshot() {  # every call copies the tree afresh: long-lived processes run from one copy of it
+snapshot() {  # the host's tree may be rewritten while work runs: long-lived processes run from one copy of it
   [ -d $R/src ] || { mkdir -p $R/src && tar cf - --exclude=./.git --exclude=./.carry --exclude=./.whl --exclude=./.gl . \
       | tar xf - -C $R/src; }
   cd $R/src
 }
 case "$1" in
-build)  # in its own session: a process left in the call's group ends with the call
+build)  # under setsid: a process left in the launching shell's process group ends with that shell
   snapshot
   setsid nohup bash -c "$R/src/docs/runs/stage1_net_20261202/run.sh build-here" < /dev/null > /dev/null 2>&1 &
   echo "build started" ;;
@@ -30,7 +30,7 @@ build-here)
       python3 -m jax3dc.cli data build --out $R/data-$seed --objects $n --seed $seed --scenes 0 --views ${VIEWS:-1} --size 128 \
           --workers 16 --appearance varied --quiet >> $R/build.log 2>&1 && echo "built $seed $(date +%s)" >> $R/build.log
   done; echo "all built" >> $R/build.log ;;
-all)  # builds, then trains, in one session that outlives the call (run from the snapshot's copy)
+all)  # builds, then trains, under setsid so both outlive the launching shell (run from the snapshot's copy)
   snapshot; me=$R/src/docs/runs/stage1_net_20261202/run.sh
   setsid nohup bash -c "$me build-here; $me start" < /dev/null > $R/all.log 2>&1 &
   echo "all started" ;;
