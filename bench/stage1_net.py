@@ -73,6 +73,18 @@ def _score(network, keys: list[str], images: list[np.ndarray], texts: list[str],
     return scores, predicted, read_s
 
 
+def _per_build(scores: list, builds: list[int], folders: list[Path]) -> dict[str, dict]:
+    """Table rows of ``scores`` per build folder (``builds[i]`` indexes ``folders``)."""
+    return {str(folders[b]): summarise([s for s, sb in zip(scores, builds) if sb == b]) for b in sorted(set(builds))}
+
+
+def _per_category(scores: list) -> dict[str, dict]:
+    groups: dict[str, list] = defaultdict(list)
+    for score in scores:
+        groups[score.key.split("/")[0]].append(score)
+    return {c: summarise(v) for c, v in sorted(groups.items())}
+
+
 def score_folders(networks: list[str], folders: list[Path], out: Path) -> dict:
     """Each network folder scored on the test records of ``folders`` (overall and per build)."""
     rows, cache = {}, {}
@@ -83,13 +95,8 @@ def score_folders(networks: list[str], folders: list[Path], out: Path) -> dict:
             cache[size] = _load_split_images(folders, size, only="test")["test"]
         keys, images, texts, builds = cache[size]
         scores, _, read_s = _score(network, keys, images, texts)
-        per_category: dict[str, list] = defaultdict(list)
-        for score in scores:
-            per_category[score.key.split("/")[0]].append(score)
         rows[folder] = {"test": summarise(scores), "reader_seconds_per_image": round(read_s, 4),
-                        "per_build": {str(folders[b]): summarise([s for s, sb in zip(scores, builds) if sb == b])
-                                      for b in sorted(set(builds))},
-                        "per_category": {c: summarise(v) for c, v in sorted(per_category.items())}}
+                        "per_build": _per_build(scores, builds, folders), "per_category": _per_category(scores)}
         print(table(folder, rows[folder]["test"]).splitlines()[-1], flush=True)
     (out / "score.json").write_text(json.dumps(rows, indent=1), encoding="utf-8")
     return rows
@@ -172,8 +179,7 @@ def main() -> None:
     scores, predicted, read_s = _score(network, keys[:n], images[:n], texts[:n])
     score_s = time.perf_counter() - t
     metrics = summarise(scores)
-    per_build = {str(folders[b]): summarise([s for s, sb in zip(scores, builds) if sb == b])
-                 for b in sorted(set(builds[:n]))}
+    per_build = _per_build(scores, builds[:n], folders)
     compared = {}
     if a.compare:
         other = load_network(a.compare)
@@ -183,19 +189,15 @@ def main() -> None:
         chosen = [index[k] for k in keys[:n]]
         other_scores, _, _ = _score(other, keys[:n], [own[1][i] for i in chosen], texts[:n])
         compared = {"folder": a.compare, "test": summarise(other_scores),
-                    "per_build": {str(folders[b]): summarise([s for s, sb in zip(other_scores, builds) if sb == b])
-                                  for b in sorted(set(builds[:n]))}}
+                    "per_build": _per_build(other_scores, builds[:n], folders)}
     with (out / "test.jsonl").open("w", encoding="utf-8") as f:
         for s, text, ref in zip(scores, predicted, texts):
             f.write(json.dumps({**s.to_dict(), "predicted": text, "reference": ref}, separators=(",", ":")) + "\n")
-    per_category: dict[str, list] = defaultdict(list)
-    for s in scores:
-        per_category[s.key.split("/")[0]].append(s)
     summary = {"args": vars(a), "records": {k: len(v) for k, v in sets.items()}, "train_seconds": round(train_s, 1),
                "train_log": log, "held_out": held_out, "weights_bytes": weights,
                "reader_seconds_per_image": round(read_s, 4), "scoring_seconds": round(score_s, 1), "test": metrics,
                "test_per_build": per_build, "compared": compared,
-               "test_per_category": {c: summarise(v) for c, v in sorted(per_category.items())}}
+               "test_per_category": _per_category(scores)}
     (out / "summary.json").write_text(json.dumps(summary, indent=1), encoding="utf-8")
     if a.release:
         shutil.copytree(package, a.release, dirs_exist_ok=True)

@@ -16,10 +16,8 @@ import warnings
 from importlib.metadata import entry_points
 
 from jax3dc.errors import Jax3dcError, shorten
-from jax3dc.gl import configure_gl
-
-configure_gl()  # before the command modules: some import mujoco, which reads MUJOCO_GL only then
-
+# importing the package chose the headless GL backend (jax3dc/__init__.py) before the command
+# modules below, some of which import mujoco, which reads MUJOCO_GL only then
 from jax3dc import structure_cli  # noqa: E402
 from jax3dc.export import cli as export_cli  # noqa: E402
 from jax3dc.physics import cli as physics_cli  # noqa: E402

@@ -3,7 +3,7 @@
 MuJoCo reads MUJOCO_GL once, at its first import, and otherwise defaults to GLFW, which fails on a
 machine without a display at the first render. The `jax3dc` command imports modules that import
 mujoco (the physics checks) long before it renders, so importing the package calls
-:func:`configure_gl` (as do the command and the renderer) before any ``import mujoco`` of ours.
+:func:`configure_gl`, before any ``import mujoco`` of ours.
 
 A headless backend is chosen only where its library is installed: ``import mujoco`` itself fails
 under MUJOCO_GL=egl without libEGL (a GPU machine without the Mesa/GLVND packages), and the

@@ -14,7 +14,7 @@ pass sees any of it: the floor is added to the RGB pass's scene only (no model g
 model's extent and clipping planes are those of the plain model), textures and lights do not
 reach the segmentation pass, so S of a view depends only on the parts, poses and camera.
 
-The OpenGL backend is chosen by :func:`jax3dc.gl.configure_gl` before mujoco is imported.
+The OpenGL backend is chosen by :func:`jax3dc.gl.configure_gl` when the package is imported, before mujoco is.
 """
 
 from __future__ import annotations
@@ -29,7 +29,6 @@ import trimesh
 from PIL import Image
 
 from jax3dc.errors import SetupError
-from jax3dc.gl import configure_gl
 from jax3dc.materials import MATERIALS
 from jax3dc.palette import BACKGROUND_RGB, part_colour
 from jax3dc.structure import Structure
@@ -39,8 +38,7 @@ PNG_COMPRESS_LEVEL = 6
 FOVY_DEGREES = 45.0  # MuJoCo's default vertical field of view: the plain renders' only one
 APPEARANCES = ("plain", "varied")
 
-configure_gl()
-import mujoco  # noqa: E402  (after the GL backend is chosen)
+import mujoco  # the package's import chose the GL backend first
 
 
 @dataclass(frozen=True)
