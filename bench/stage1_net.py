@@ -16,7 +16,9 @@
                run, each at its own image size. OUT/summary.json holds the numbers, OUT/test.jsonl
                the per-object scores, and the last lines print the table.
 With --release DIR the packaged folder is also copied there (e.g. jax3dc/release/stage1).
-With --score FOLDER... nothing is built or trained: those network folders are scored on the test
+With --box-weight W the numbers also train on their error in the parts' boxes
+(train.stage1_box_metric; metrics kept by parameter text in --box-cache, which --metrics-only fills
+with --box-workers processes and then stops). With --score FOLDER... nothing is built or trained: those network folders are scored on the test
 split of --data, each at its own image size, and OUT/score.json holds their rows overall and per build.
 """
 
@@ -40,6 +42,7 @@ from eval.metrics.parameters import score_parameters, summarise
 from eval.parameters_run import table
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.stage1_net import OutputLayout, Stage1Net, Stage1NetConfig, load_network, network_image, save_network
+from train.stage1_box_metric import box_metrics
 from train.stage1_net import TrainConfig, accuracy, targets, train
 
 
@@ -122,6 +125,13 @@ def main() -> None:
     p.add_argument("--minutes", type=float, default=10.0, help="training stops after this many minutes")
     p.add_argument("--batch", type=int, default=64)
     p.add_argument("--lr", type=float, default=2e-3)
+    p.add_argument("--number-weight", type=float, default=4.0, help="weight of the numbers' smooth-L1 loss")
+    p.add_argument("--box-weight", type=float, default=0.0, help="weight of the numbers' box-metric loss "
+                   "(train.stage1_box_metric; 0: off)")
+    p.add_argument("--box-cache", default="", help="JSON-lines cache of box metrics by parameter text")
+    p.add_argument("--box-workers", type=int, default=1, help="processes computing box metrics")
+    p.add_argument("--metrics-only", action="store_true", help="only fill --box-cache with the train split's "
+                   "box metrics (no images decoded, nothing trained)")
     p.add_argument("--eval-limit", type=int, default=0, help="test objects to score (0: all)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--release", default="", help="also copy the packaged folder here")
@@ -139,6 +149,17 @@ def main() -> None:
                    "--views", "1", "--size", str(a.render_size), "--workers", str(a.workers), "--appearance", "varied",
                    "--quiet"])
 
+    layout = OutputLayout.of(SCHEMAS)
+    width = max(sum(1 for s in layout.numbers if s.category == c) for c in layout.categories)
+    if a.metrics_only:
+        if not a.box_cache:
+            raise SystemExit("--metrics-only needs --box-cache")
+        t = time.perf_counter()
+        texts = [r.parameters for f in folders for r in read_dataset(f)
+                 if r.parameters and r.meta.get("split", "train") == "train"]
+        box_metrics(texts, layout, SCHEMAS, width, workers=a.box_workers, cache=Path(a.box_cache))
+        print(f"[stage1_net] box metrics of {len(set(texts))} train objects in {time.perf_counter() - t:.0f} s")
+        return
     start = load_network(a.init) if a.init else None
     if start is not None:
         if start.schemas != SCHEMAS:
@@ -147,15 +168,22 @@ def main() -> None:
         a.image_size, a.widths, a.blocks, a.hidden = c.image_size, list(c.widths), c.blocks, c.hidden
     t = time.perf_counter()
     splits = _load_split_images(folders, a.image_size)
-    layout = OutputLayout.of(SCHEMAS)
-    sets = {name: targets(images, texts, layout, SCHEMAS) for name, (_, images, texts, _) in splits.items()}
+    box = {}
+    if a.box_weight > 0:  # the loss reads metrics of the train split only
+        texts = splits["train"][2]
+        box["train"] = box_metrics(texts, layout, SCHEMAS, width, workers=a.box_workers,
+                                   cache=Path(a.box_cache) if a.box_cache else None)
+        print(f"[stage1_net] box metrics of {len(set(texts))} train objects in {time.perf_counter() - t:.0f} s", flush=True)
+    sets = {name: targets(images, texts, layout, SCHEMAS, box.get(name))
+            for name, (_, images, texts, _) in splits.items()}
     print(f"[stage1_net] records: {({k: len(v) for k, v in sets.items()})} loaded in {time.perf_counter() - t:.0f} s",
           flush=True)
 
     model = start.model if start is not None else Stage1Net(
         Stage1NetConfig.for_layout(layout, image_size=a.image_size, widths=tuple(a.widths), hidden=a.hidden,
                                    blocks=a.blocks), nnx.Rngs(a.seed))
-    config = TrainConfig(steps=a.steps, batch=a.batch, lr=a.lr, time_limit_s=a.minutes * 60, seed=a.seed)
+    config = TrainConfig(steps=a.steps, batch=a.batch, lr=a.lr, time_limit_s=a.minutes * 60, seed=a.seed,
+                         number_weight=a.number_weight, box_weight=a.box_weight)
     t = time.perf_counter()
     log = train(model, sets["train"], layout, config, on_log=lambda row: print(f"[stage1_net] {row}", flush=True))
     train_s = time.perf_counter() - t
@@ -166,7 +194,8 @@ def main() -> None:
     source = f"--data {' '.join(a.data)}" if a.data else f"--objects {' '.join(map(str, a.objects))}"
     recipe = (f"python3 -m bench.stage1_net {source}{f' --init {a.init}' if a.init else ''} --image-size {a.image_size} "
               f"--widths {' '.join(map(str, a.widths))} --blocks {a.blocks} --hidden {a.hidden} --batch {a.batch} "
-              f"--lr {a.lr} --steps {a.steps} --minutes {a.minutes} --seed {a.seed}")
+              f"--lr {a.lr} --steps {a.steps} --minutes {a.minutes} --seed {a.seed} --number-weight {a.number_weight} "
+              f"--box-weight {a.box_weight}")
     save_network(package, model, SCHEMAS, notes={"recipe": recipe, "train_records": len(sets["train"]),
                                                  "steps": log[-1]["step"]})
     weights = (package / "model.safetensors").stat().st_size

@@ -3,11 +3,13 @@
 Targets per record: the category index; each of its Number values normalised to [0, 1] of the
 entry's range; each discrete value's class. Loss: cross-entropy of the category, plus, over the
 true category's values only, the mean cross-entropy of the discrete values and a weighted
-smooth-L1 of the numbers (other categories' outputs get no gradient). Images are shifted by a few
-pixels and their brightness jittered each step, which the small build needs against overfitting.
-The set is put on the device once and each jitted step gathers and augments its own batch there
-(on a GPU the host would otherwise be the bottleneck); optax AdamW with warm-up and cosine decay,
-bounded by steps and wall time.
+smooth-L1 of the numbers (other categories' outputs get no gradient); with ``box_weight``, also
+the numbers' error measured in the parts' boxes (train.stage1_box_metric: sqrt(dᵀ M d) per record,
+so an error that moves no box costs nothing and one that moves a thin part costs much). Images are
+shifted by a few pixels and their brightness jittered each step, which the small build needs
+against overfitting. The set is put on the device once and each jitted step gathers and augments
+its own batch there (on a GPU the host would otherwise be the bottleneck); optax AdamW with warm-up
+and cosine decay, bounded by steps and wall time.
 """
 
 from __future__ import annotations
@@ -38,6 +40,8 @@ class Targets:
     number_mask: np.ndarray  # [B, N] bool: the record's category owns the value
     discrete: np.ndarray  # [B, D] int32 class index
     discrete_mask: np.ndarray  # [B, D] bool
+    metric_index: np.ndarray  # [B, K] int32: head index of each number the box metric covers, -1 past them
+    metric: np.ndarray  # [B, K, K] float32: the box metric (zero where none was computed)
 
     def take(self, index: np.ndarray) -> "Targets":
         return Targets(*(getattr(self, f)[index] for f in self.__dataclass_fields__))
@@ -47,12 +51,17 @@ class Targets:
 
 
 def targets(images: Sequence[np.ndarray], texts: Sequence[str], layout: OutputLayout,
-            schemas: Mapping[str, Schema]) -> Targets:
-    """The arrays of records given as network images (uint8) and parameter texts."""
+            schemas: Mapping[str, Schema], box: tuple[np.ndarray, np.ndarray] | None = None) -> Targets:
+    """The arrays of records given as network images (uint8) and parameter texts; ``box`` is
+    (index, metric) of train.stage1_box_metric.box_metrics for the same records, or none."""
     n = len(texts)
     nn, nd = max(len(layout.numbers), 1), max(len(layout.discrete), 1)
+    index, metric = box if box is not None else (np.full((n, 1), -1, np.int32), np.zeros((n, 1, 1), np.float32))
+    if len(index) != n or len(metric) != n:
+        raise ValueError(f"box metrics for {len(index)} records, but {n} texts")
     out = Targets(np.stack(images).astype(np.uint8), np.zeros(n, np.int32), np.zeros((n, nn), np.float32),
-                  np.zeros((n, nn), bool), np.zeros((n, nd), np.int32), np.zeros((n, nd), bool))
+                  np.zeros((n, nn), bool), np.zeros((n, nd), np.int32), np.zeros((n, nd), bool),
+                  np.asarray(index, np.int32), np.asarray(metric, np.float32))
     index = {c: i for i, c in enumerate(layout.categories)}
     for i, text in enumerate(texts):
         params = parse_parameters(text, schemas)
@@ -78,6 +87,7 @@ class TrainConfig:
     warmup: int = 100
     weight_decay: float = 1e-4
     number_weight: float = 4.0
+    box_weight: float = 0.0  # weight of the numbers' box-metric loss (needs Targets with metrics)
     shift: int = 6  # pixels of random translation
     time_limit_s: float = 600.0
     log_every: int = 100
@@ -101,7 +111,19 @@ def augment(images: jax.Array, key: jax.Array, shift: int) -> jax.Array:
     return jnp.clip((out - mean) * contrast + mean * gain, 0.0, 1.0)
 
 
-def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: float) -> tuple[jax.Array, dict]:
+def box_loss(numbers: jax.Array, batch: dict) -> jax.Array:
+    """Mean over the batch's records that have a metric of sqrt(dᵀ M d): the relative box error the
+    number error d causes, to first order (train.stage1_box_metric)."""
+    index = batch["metric_index"]
+    valid = index >= 0
+    d = jnp.take_along_axis(numbers - batch["numbers"], jnp.maximum(index, 0), axis=1) * valid
+    q = jnp.einsum("bk,bkl,bl->b", d, batch["metric"], d)
+    has = valid.any(axis=-1).astype(jnp.float32)
+    return ((jnp.sqrt(jnp.maximum(q, 0.0) + 1e-4) - 1e-2) * has).sum() / jnp.maximum(has.sum(), 1.0)
+
+
+def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: float,
+          box_weight: float = 0.0) -> tuple[jax.Array, dict]:
     category, numbers, discrete = model(batch["images"])
     ce_cat = optax.softmax_cross_entropy_with_integer_labels(category, batch["category"]).mean()
     logits = jnp.where(class_mask[None], discrete, -1e9)
@@ -112,7 +134,11 @@ def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: f
     err = optax.huber_loss(numbers, batch["numbers"], delta=0.1) / 0.1
     l_num = (err * nmask).sum() / jnp.maximum(nmask.sum(), 1.0)
     loss = ce_cat + ce_disc + number_weight * l_num
-    return loss, {"loss": loss, "category_ce": ce_cat, "discrete_ce": ce_disc, "number_l1": l_num}
+    metrics = {"category_ce": ce_cat, "discrete_ce": ce_disc, "number_l1": l_num}
+    if box_weight > 0.0:
+        metrics["box"] = box_loss(numbers, batch)
+        loss = loss + box_weight * metrics["box"]
+    return loss, {"loss": loss, **metrics}
 
 
 def learning_rate(config: TrainConfig, step: int, progress: float) -> float:
@@ -142,7 +168,8 @@ def train(model: Stage1Net, data: Targets, layout: OutputLayout, config: TrainCo
              lr: jax.Array) -> dict:
         batch = {f: a[index] for f, a in arrays.items()}
         batch["images"] = augment(batch["images"], key, config.shift)
-        grads, metrics = nnx.grad(_loss, has_aux=True)(model, batch, class_mask, config.number_weight)
+        grads, metrics = nnx.grad(_loss, has_aux=True)(model, batch, class_mask, config.number_weight,
+                                                        config.box_weight)
         optimizer.opt_state.hyperparams["learning_rate"][...] = lr
         optimizer.update(model, grads)
         return metrics
