@@ -126,6 +126,7 @@ def main() -> None:
     p.add_argument("--batch", type=int, default=64)
     p.add_argument("--lr", type=float, default=2e-3)
     p.add_argument("--number-weight", type=float, default=4.0, help="weight of the numbers' smooth-L1 loss")
+    p.add_argument("--discrete-weight", type=float, default=1.0, help="weight of the discrete values' cross-entropy")
     p.add_argument("--box-weight", type=float, default=0.0, help="weight of the numbers' box-metric loss "
                    "(train.stage1_box_metric; 0: off)")
     p.add_argument("--box-cache", default="", help="JSON-lines cache of box metrics by parameter text")
@@ -183,7 +184,8 @@ def main() -> None:
         Stage1NetConfig.for_layout(layout, image_size=a.image_size, widths=tuple(a.widths), hidden=a.hidden,
                                    blocks=a.blocks), nnx.Rngs(a.seed))
     config = TrainConfig(steps=a.steps, batch=a.batch, lr=a.lr, time_limit_s=a.minutes * 60, seed=a.seed,
-                         number_weight=a.number_weight, box_weight=a.box_weight)
+                         number_weight=a.number_weight, box_weight=a.box_weight,
+                         discrete_weight=a.discrete_weight)
     t = time.perf_counter()
     log = train(model, sets["train"], layout, config, on_log=lambda row: print(f"[stage1_net] {row}", flush=True))
     train_s = time.perf_counter() - t
@@ -195,7 +197,7 @@ def main() -> None:
     recipe = (f"python3 -m bench.stage1_net {source}{f' --init {a.init}' if a.init else ''} --image-size {a.image_size} "
               f"--widths {' '.join(map(str, a.widths))} --blocks {a.blocks} --hidden {a.hidden} --batch {a.batch} "
               f"--lr {a.lr} --steps {a.steps} --minutes {a.minutes} --seed {a.seed} --number-weight {a.number_weight} "
-              f"--box-weight {a.box_weight}")
+              f"--box-weight {a.box_weight} --discrete-weight {a.discrete_weight}")
     save_network(package, model, SCHEMAS, notes={"recipe": recipe, "train_records": len(sets["train"]),
                                                  "steps": log[-1]["step"]})
     weights = (package / "model.safetensors").stat().st_size

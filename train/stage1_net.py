@@ -88,6 +88,7 @@ class TrainConfig:
     weight_decay: float = 1e-4
     number_weight: float = 4.0
     box_weight: float = 0.0  # weight of the numbers' box-metric loss (needs Targets with metrics)
+    discrete_weight: float = 1.0  # weight of the discrete values' cross-entropy
     shift: int = 6  # pixels of random translation
     time_limit_s: float = 600.0
     log_every: int = 100
@@ -123,7 +124,7 @@ def box_loss(numbers: jax.Array, batch: dict) -> jax.Array:
 
 
 def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: float,
-          box_weight: float = 0.0) -> tuple[jax.Array, dict]:
+          box_weight: float = 0.0, discrete_weight: float = 1.0) -> tuple[jax.Array, dict]:
     category, numbers, discrete = model(batch["images"])
     ce_cat = optax.softmax_cross_entropy_with_integer_labels(category, batch["category"]).mean()
     logits = jnp.where(class_mask[None], discrete, -1e9)
@@ -133,7 +134,7 @@ def _loss(model: Stage1Net, batch: dict, class_mask: jax.Array, number_weight: f
     nmask = batch["number_mask"].astype(jnp.float32)
     err = optax.huber_loss(numbers, batch["numbers"], delta=0.1) / 0.1
     l_num = (err * nmask).sum() / jnp.maximum(nmask.sum(), 1.0)
-    loss = ce_cat + ce_disc + number_weight * l_num
+    loss = ce_cat + discrete_weight * ce_disc + number_weight * l_num
     metrics = {"category_ce": ce_cat, "discrete_ce": ce_disc, "number_l1": l_num}
     if box_weight > 0.0:
         metrics["box"] = box_loss(numbers, batch)
@@ -169,7 +170,7 @@ def train(model: Stage1Net, data: Targets, layout: OutputLayout, config: TrainCo
         batch = {f: a[index] for f, a in arrays.items()}
         batch["images"] = augment(batch["images"], key, config.shift)
         grads, metrics = nnx.grad(_loss, has_aux=True)(model, batch, class_mask, config.number_weight,
-                                                        config.box_weight)
+                                                        config.box_weight, config.discrete_weight)
         optimizer.opt_state.hyperparams["learning_rate"][...] = lr
         optimizer.update(model, grads)
         return metrics
