@@ -10,7 +10,9 @@
 # --data runs/s1r2/data-0 ... data-3 --metrics-only --box-cache .s1box/metric.jsonl --box-workers 2`); the
 # host computes the new builds' (`--metrics-only`, 15 processes) while a trains.
 # Host setup (wheels, entry points, EGL): docs/runs/release5_20261201/run.sh setup.
-# Usage: [NEW=N EXTRA=K MINUTES=M] run.sh all | wait MINUTES | pack OUTDIR
+#   d  from c, alone on the GPU, the same loss (`MINUTES=5.5 run.sh more`, once `all` has ended)
+# Usage: [NEW=N EXTRA=K MINUTES=M] run.sh all | more | wait MINUTES | pack OUTDIR
+# (a call brings back at most 8 files, so `pack` writes one tar of the candidates' folders and logs)
 set -uo pipefail
 R=/tmp/s1b
 export MUJOCO_GL=egl PYTHONUNBUFFERED=1 PYTHONPATH=/tmp/r5/site LD_LIBRARY_PATH=/tmp/r5/gl/usr/lib/x86_64-linux-gnu:${LD_LIBRARY_PATH:-}
@@ -46,6 +48,11 @@ here)
   train b --init jax3dc/release/stage1 --lr 1e-3 --number-weight 1 --box-weight 4 --box-cache $R/metric.jsonl
   train c --widths 32 64 128 256 --blocks 2 --lr 2e-3 --number-weight 1 --box-weight 4 --box-cache $R/metric_c.jsonl
   echo "all started" >> $R/build.log ;;
+more)
+  snapshot
+  data=$(for b in $BUILDS; do echo -n "$R/data-${b%%:*} "; done)
+  train d --init $R/c/stage1 --lr 1e-3 --number-weight 1 --box-weight 4 --box-cache $R/metric_c.jsonl
+  echo "more started" >> $R/build.log ;;
 wait)
   end=$(( $(date +%s) + ${2:-9} * 60 ))
   while [ $(date +%s) -lt $end ]; do
@@ -53,13 +60,9 @@ wait)
     sleep 10
   done
   tail -n 4 $R/build.log | cut -c1-300
-  for f in $R/a.log $R/b.log $R/c.log; do [ -f $f ] && { echo "== $f"; tail -n 3 $f | cut -c1-400; }; done
+  for f in $R/a.log $R/b.log $R/c.log $R/d.log; do [ -f $f ] && { echo "== $f"; tail -n 3 $f | cut -c1-400; }; done
   nvidia-smi --query-gpu=utilization.gpu,memory.used --format=csv,noheader ;;
 pack)
-  for name in a b c; do
-    [ -d $R/$name/stage1 ] || continue
-    mkdir -p $2/$name && cp -r $R/$name/stage1 $2/$name/ && cp $R/$name/summary.json $R/$name/test.jsonl $2/$name/ 2>/dev/null
-    cp $R/$name.log $2/$name/train.log
-  done
-  cp $R/build.log $2/ ; ls -la $2 ;;
+  cd $R && tar cf $2/candidates.tar $(for n in a b c d; do [ -d $n/stage1 ] && echo "$n/stage1 $n/summary.json $n.log"; done) build.log
+  ls -la $2 ;;
 esac
