@@ -21,6 +21,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from jax3dc.errors import Jax3dcError
+from jax3dc.factories.registry import run_parameters
 from jax3dc.parameters import Parameters, Schema, parse_parameters
 from jax3dc.parameters.schema import DECIMALS
 from jax3dc.stage1_net.layout import OutputLayout
@@ -30,7 +31,6 @@ MIN_EXTENT = 0.02  # nu: a part thinner than this counts as this thick
 
 
 def _boxes(parameters: Parameters) -> dict[int, np.ndarray]:
-    from jax3dc.factories.registry import run_parameters
     return {pid: np.asarray(mesh.bounds, np.float64) for pid, mesh in run_parameters(parameters).parts.items()}
 
 
