@@ -18,7 +18,8 @@
 With --release DIR the packaged folder is also copied there (e.g. jax3dc/release/stage1).
 With --box-weight W the numbers also train on their error in the parts' boxes
 (train.stage1_box_metric; metrics kept by parameter text in --box-cache, which --metrics-only fills
-with --box-workers processes and then stops). With --score FOLDER... nothing is built or trained: those network folders are scored on the test
+with --box-workers processes and then stops).
+With --score FOLDER... nothing is built or trained: those network folders are scored on the test
 split of --data, each at its own image size, and OUT/score.json holds their rows overall and per build.
 """
 

@@ -24,7 +24,8 @@ from jax3dc.errors import Jax3dcError
 from jax3dc.factories.registry import run_parameters
 from jax3dc.parameters import Parameters, Schema, parse_parameters
 from jax3dc.parameters.schema import DECIMALS
-from jax3dc.stage1_net.layout import OutputLayout
+from jax3dc.stage1_net.folder import normalised_number
+from jax3dc.stage1_net.layout import OutputLayout, Slot
 
 STEP = 0.05  # of an entry's range
 MIN_EXTENT = 0.02  # nu: a part thinner than this counts as this thick
@@ -43,6 +44,23 @@ def _nudged(parameters: Parameters, name: str, slot: int | None, value: float) -
     return Parameters(parameters.category, values)
 
 
+def _end(params: Parameters, slot: Slot, share: float, target: float, base: dict[int, np.ndarray]
+         ) -> tuple[float, dict[int, np.ndarray]]:
+    """(share, boxes) with ``slot``'s number moved to ``target`` (clipped to its range and rounded as
+    the schema rounds); the record itself where the move is none, fails, or changes the set of parts
+    (a count derived from a length)."""
+    lo, hi = slot.spec.lo, slot.spec.hi
+    moved = round(lo + min(max(target, 0.0), 1.0) * (hi - lo), DECIMALS)
+    value = params[slot.spec.name] if slot.slot is None else params[slot.spec.name][slot.slot]
+    if moved == value:
+        return share, base
+    try:
+        boxes = _boxes(_nudged(params, slot.spec.name, slot.slot, moved))
+    except Jax3dcError:
+        return share, base
+    return (normalised_number(slot.spec, moved), boxes) if sorted(boxes) == sorted(base) else (share, base)
+
+
 def box_metric(text: str, layout: OutputLayout, schemas: Mapping[str, Schema]) -> tuple[np.ndarray, np.ndarray]:
     """(head indices [K] of the record's numbers, metric M [K, K]) of one parameter text."""
     params = parse_parameters(text, schemas)
@@ -53,23 +71,9 @@ def box_metric(text: str, layout: OutputLayout, schemas: Mapping[str, Schema]) -
     weight = 1.0 / np.maximum(corners[:, 1] - corners[:, 0], MIN_EXTENT)  # [P, 3]
     columns = []
     for s in slots:
-        lo, hi = s.spec.lo, s.spec.hi
         value = params[s.spec.name] if s.slot is None else params[s.spec.name][s.slot]
-        share = 0.0 if hi == lo else (value - lo) / (hi - lo)
-        ends = []
-        for target in (min(share + STEP, 1.0), max(share - STEP, 0.0)):
-            moved = round(lo + target * (hi - lo), DECIMALS)
-            if moved == value:
-                ends.append((share, base))
-                continue
-            try:
-                ends.append(((moved - lo) / (hi - lo), _boxes(_nudged(params, s.spec.name, s.slot, moved))))
-            except Jax3dcError:
-                ends.append((share, base))
-        (s_hi, b_hi), (s_lo, b_lo) = ends
-        # a nudge that changes the set of parts (a count derived from a length) is left out
-        (s_hi, b_hi) = (s_hi, b_hi) if sorted(b_hi) == ids else (share, base)
-        (s_lo, b_lo) = (s_lo, b_lo) if sorted(b_lo) == ids else (share, base)
+        share = normalised_number(s.spec, value)
+        (s_hi, b_hi), (s_lo, b_lo) = (_end(params, s, share, t, base) for t in (share + STEP, share - STEP))
         if s_hi == s_lo:
             columns.append(np.zeros(corners.size))
             continue

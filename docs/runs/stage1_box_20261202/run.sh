@@ -23,7 +23,7 @@ snapshot() {  # the host's tree may be rewritten while work runs: long-lived pro
       | tar xf - -C $R/src; }
   cd $R/src
 }
-train() {  # train NAME ARGS... : one candidate in its own session
+train() {  # train NAME ARGS... : one candidate, detached (setsid) so it outlives the launching shell
   setsid nohup python3 -m bench.stage1_net --out $R/$1 --data $data --image-size 128 --batch 256 --steps 60000 \
       --minutes ${MINUTES:-8} --hidden 512 --eval-limit 200 "${@:2}" > $R/$1.log 2>&1 < /dev/null &
 }
