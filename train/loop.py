@@ -31,7 +31,7 @@ from train.batch import check_batch
 from train.checkpoint import RunCheckpoints
 from train.config import TrainConfig, sharding_rules, to_json, validate
 from train.data import make_loader, run_pivot_frame, run_processor, run_tokenizer
-from train.metrics_log import FlopsModel, MetricsLog, peak_flops, plot_losses
+from train.metrics_log import FlopsModel, MetricsLog, peak_flops, peak_memory_gib, plot_losses
 from train.optimizer import build_optimizer, learning_rate
 from train.parallel import batch_sharding, build_mesh, global_batch, replicated, to_host
 from train.step import TrainState, make_eval_step, make_train_step
@@ -227,6 +227,9 @@ def run(cfg: TrainConfig, on_step: Callable[[int, dict], None] | None = None,
                     if peak:
                         values["mfu"] = flops.step_flops(cfg.batch_size, cfg.seq_len) / dt / (peak * jax.device_count())
                     timer, timed_steps = time.perf_counter(), 0
+                memory = peak_memory_gib(jax.local_devices())
+                if memory is not None:
+                    values["peak_mem_gib"] = memory
                 if save_s:
                     values["save_s"] = save_s
                 wait_s = save_s = 0.0

@@ -22,7 +22,7 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from tqdm import tqdm
 
@@ -40,6 +40,15 @@ def peak_flops(device_kind: str) -> float | None:
         if name.lower() in device_kind.lower():
             return flops
     return None
+
+
+def peak_memory_gib(devices: Sequence[Any]) -> float | None:
+    """The most device memory any of `devices` has held since the process started, in GiB; None
+    where the backend keeps no count (CPU). Logged with each step so a run shows whether its
+    settings fit a smaller card (issue 51: the 4B at fp32 quality on 80 GB)."""
+    peaks = [(d.memory_stats() or {}).get("peak_bytes_in_use") for d in devices]
+    peaks = [p for p in peaks if p is not None]
+    return max(peaks) / 2**30 if peaks else None
 
 
 @dataclass(frozen=True)
