@@ -33,6 +33,8 @@ def main() -> None:
     ap.add_argument("--layout", choices=LAYOUTS, required=True)
     ap.add_argument("--steps", type=int, default=6)
     ap.add_argument("--layers", type=int, default=0, help="> 0: this many decoder layers instead of the preset's")
+    ap.add_argument("--compile-only", action="store_true",
+                    help="lower and compile from shapes alone (no weights allocated): compile times on any machine")
     add_json_lines(ap)
     a = ap.parse_args()
     # lazy: --help answers before jax loads
@@ -55,17 +57,30 @@ def main() -> None:
     def one_layer(rngs: nnx.Rngs) -> DecoderLayer:
         return DecoderLayer(text, rngs=rngs, **kw)
 
-    if a.layout.startswith("stacked"):
-        make = nnx.vmap(one_layer, in_axes=0, out_axes=0)
-        graphdef, layers = nnx.split(make(nnx.Rngs(0).fork(split=n_layers)))
-    else:
-        modules = [one_layer(nnx.Rngs(i)) for i in range(n_layers)]
-        graphdef, layers = nnx.split(modules[0])[0], [nnx.state(m) for m in modules]
+    def build() -> tuple[nnx.GraphDef, dict]:
+        if a.layout.startswith("stacked"):
+            make = nnx.vmap(one_layer, in_axes=0, out_axes=0)
+            graphdef, layers = nnx.split(make(nnx.Rngs(0).fork(split=n_layers)))
+        else:
+            modules = [one_layer(nnx.Rngs(i)) for i in range(n_layers)]
+            graphdef, layers = nnx.split(modules[0])[0], [nnx.state(m) for m in modules]
+        params = {"embed": 0.02 * jax.random.normal(key, (text.vocab_size, text.hidden_size)), "layers": layers,
+                  "norm": jnp.ones((text.hidden_size,))}
+        return graphdef, jax.tree.map(lambda x: x.get_value() if isinstance(x, nnx.Variable) else x, params,
+                                      is_leaf=lambda x: isinstance(x, nnx.Variable))
+
     key = jax.random.key(1)
-    params = {"embed": 0.02 * jax.random.normal(key, (text.vocab_size, text.hidden_size)), "layers": layers,
-              "norm": jnp.ones((text.hidden_size,))}
-    params = jax.tree.map(lambda x: x.get_value() if isinstance(x, nnx.Variable) else x, params,
-                          is_leaf=lambda x: isinstance(x, nnx.Variable))
+    if a.compile_only:  # shapes only: the graph is static, the weights are never allocated
+        graphdef = None
+
+        def shapes() -> dict:
+            nonlocal graphdef
+            graphdef, params = build()
+            return params
+
+        params = jax.eval_shape(shapes)
+    else:
+        graphdef, params = build()
     seq, hd = a.seq, text.head_dim
     inv = 1.0 / (text.rope_theta ** (jnp.arange(0, hd, 2) / hd))
     ang = jnp.arange(seq)[:, None] * inv[None]
@@ -97,20 +112,27 @@ def main() -> None:
         return optax.softmax_cross_entropy_with_integer_labels(logits[:, :-1], ids[:, 1:]).mean()
 
     opt = optax.chain(optax.clip_by_global_norm(1.0), optax.adamw(1e-5, weight_decay=0.01))
-    opt_state = opt.init(params)
+    opt_state = jax.eval_shape(opt.init, params) if a.compile_only else opt.init(params)
 
     def step(p, s, ids):
         loss, g = jax.value_and_grad(loss_fn)(p, ids)
         updates, s = opt.update(g, s, p)
         return optax.apply_updates(p, updates), s, loss
 
-    ids = jax.random.randint(key, (1, seq), 0, text.vocab_size)
+    ids = jax.ShapeDtypeStruct((1, seq), jnp.int32) if a.compile_only else jax.random.randint(
+        key, (1, seq), 0, text.vocab_size)
     jitted = jax.jit(step, donate_argnums=(0, 1))
     t0 = time.perf_counter()
     lowered = jitted.lower(params, opt_state, ids)
     t1 = time.perf_counter()
     compiled = lowered.compile()
     t2 = time.perf_counter()
+    row = {"bench": "layer_storage", "preset": a.preset, "layers": n_layers, "layout": a.layout, "seq": seq,
+           "device": jax.devices()[0].device_kind, "trace_lower_s": t1 - t0, "xla_s": t2 - t1}
+    if a.compile_only:
+        print(f"{a.layout:13s} trace+lower {row['trace_lower_s']:.1f} s, XLA {row['xla_s']:.1f} s", flush=True)
+        append_json_lines(a.json, [row])
+        return
     params, opt_state, loss = compiled(params, opt_state, ids)
     loss.block_until_ready()
     t3 = time.perf_counter()
@@ -119,10 +141,8 @@ def main() -> None:
     loss.block_until_ready()
     step_s = (time.perf_counter() - t3) / a.steps
     stats = jax.devices()[0].memory_stats() or {}
-    row = {"bench": "layer_storage", "preset": a.preset, "layers": n_layers, "layout": a.layout, "seq": seq,
-           "device": jax.devices()[0].device_kind, "trace_lower_s": t1 - t0, "xla_s": t2 - t1,
-           "first_step_s": t3 - t2, "step_s": step_s, "tokens_per_s": seq / step_s, "loss": float(loss),
-           "peak_mem_gib": stats.get("peak_bytes_in_use", 0) / 2**30}
+    row |= {"first_step_s": t3 - t2, "step_s": step_s, "tokens_per_s": seq / step_s, "loss": float(loss),
+            "peak_mem_gib": stats.get("peak_bytes_in_use", 0) / 2**30}
     print(f"{a.layout:13s} trace+lower {row['trace_lower_s']:.1f} s, XLA {row['xla_s']:.1f} s, "
           f"{row['tokens_per_s']:.0f} tokens/s, peak {row['peak_mem_gib']:.1f} GiB, loss {row['loss']:.3f}", flush=True)
     append_json_lines(a.json, [row])
