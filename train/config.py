@@ -100,6 +100,11 @@ class TrainConfig:
     # each update, so updates below half a bf16 step still move them on average
     # (train/stochastic_rounding.py); pair with moments_dtype=bfloat16 for float32 Adam arithmetic.
     stochastic_rounding: bool = False
+    # Where FSDP-sharded weights are gathered: "micro" lets each micro-batch gather them (in its
+    # forward and again in its rematerialised forward); "step" gathers them once per optimiser
+    # step in the compute dtype and reduce-scatters each micro-batch's gradient (fewer
+    # collectives with grad_accum > 1, one gathered copy of the weights held; train/step.py).
+    weight_gather: str = "micro"
     attention: str = "auto"  # auto: cuDNN fused attention on GPU, XLA elsewhere; or cudnn / xla
     # Decoder-layer rematerialisation policy (jax3dc/model/layer_stack.py): full recomputes each
     # layer in the backward pass, minimal keeps its matmul outputs, qkv its q/k/v projections, none
@@ -234,6 +239,8 @@ def validate(cfg: TrainConfig) -> None:
         raise ConfigError(f"pack must be >= 1 and loader_workers >= 0 (got {cfg.pack}, {cfg.loader_workers})")
     if cfg.attention not in ("auto", "cudnn", "xla"):
         raise ConfigError(f"attention {cfg.attention!r}: expected auto, cudnn or xla")
+    if cfg.weight_gather not in ("micro", "step"):
+        raise ConfigError(f"weight_gather {cfg.weight_gather!r}: expected micro or step")
     if cfg.remat not in REMAT_POLICIES:
         raise ConfigError(f"remat {cfg.remat!r}: expected one of {', '.join(REMAT_POLICIES)}")
     if cfg.lora_rank < 0:

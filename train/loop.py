@@ -33,7 +33,7 @@ from train.config import TrainConfig, sharding_rules, to_json, validate
 from train.data import make_loader, run_pivot_frame, run_processor, run_tokenizer
 from train.metrics_log import FlopsModel, MetricsLog, peak_flops, peak_memory_gib, plot_losses
 from train.optimizer import build_optimizer, learning_rate
-from train.parallel import batch_sharding, build_mesh, global_batch, replicated, to_host
+from train.parallel import batch_axes, batch_sharding, build_mesh, global_batch, replicated, to_host
 from train.step import TrainState, make_eval_step, make_train_step
 
 
@@ -104,7 +104,8 @@ class Trainer:
             self._train_step = make_train_step(
                 self.model.graphdef, model_state.score, self.tx, self.schedule, compute, self.mesh,
                 self.state_sharding, self.model.frozen_sharding, self._batch_shardings(g),
-                stochastic_rounding=self.cfg.stochastic_rounding)
+                stochastic_rounding=self.cfg.stochastic_rounding,
+                gather_over=batch_axes(self.mesh, self.rules) if self.cfg.weight_gather == "step" else ())
         # the mesh activates the model's activation constraints; the rules reach them and the loss
         with jax.set_mesh(self.mesh), sharding.use_rules(self.rules):
             self.state, metrics = self._train_step(self.state, self.model.frozen, g)

@@ -9,6 +9,7 @@ changes only float rounding.
 
 from __future__ import annotations
 
+import math
 from typing import Any, Callable
 
 import flax.struct
@@ -45,14 +46,37 @@ def _micro_shardings(batch_sharding: dict[str, NamedSharding]) -> dict[str, Name
     return {k: NamedSharding(s.mesh, P(*s.spec[1:])) for k, s in batch_sharding.items()}
 
 
+def gathered_shardings(shardings: Any, row_axes: tuple[str, ...]) -> Any:
+    """Each NamedSharding of `shardings` with the mesh axes that split the rows (FSDP's) taken
+    out: the layout a weight has once gathered, still split over tensor-parallel axes."""
+    def one(s: NamedSharding) -> NamedSharding:
+        def keep(entry):
+            names = tuple(a for a in ((entry,) if isinstance(entry, str) else entry or ()) if a not in row_axes)
+            return names[0] if len(names) == 1 else (names or None)
+        return NamedSharding(s.mesh, P(*(keep(e) for e in s.spec)))
+
+    return jax.tree.map(one, shardings, is_leaf=lambda x: isinstance(x, NamedSharding))
+
+
 def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTransformation,
                     schedule: optax.Schedule, compute_dtype: jnp.dtype, mesh: Mesh,
                     state_sharding: Any, frozen_sharding: Any, batch_sharding: Any,
-                    stochastic_rounding: bool = False) -> Callable:
+                    stochastic_rounding: bool = False, gather_over: tuple[str, ...] = ()) -> Callable:
     """jit(step)(state, frozen, batch) -> (state, metrics). `batch` arrays are [accum, rows, ...].
     With `stochastic_rounding`, bf16 weights take their updates rounded stochastically, with a
-    key split from the state's RNG (train/stochastic_rounding.py)."""
+    key split from the state's RNG (train/stochastic_rounding.py).
+
+    With `gather_over` (the mesh axes the rows are split over, FSDP's), the weights are cast to
+    the compute dtype and gathered over those axes once per step, before the micro-batches; every
+    micro-batch (forward, rematerialised forward, backward) reads that copy, and its gradient is
+    reduce-scattered back to the master layout in float32. Without it each micro-batch gathers the sharded weights itself (XLA does
+    so in its forward pass and again in the rematerialised one), which costs collectives per
+    micro-batch but no gathered copy in memory. With one device over those axes both are the same
+    program (no copy is made)."""
     micro_spec = _micro_shardings(batch_sharding)
+    gather_once = math.prod(mesh.shape[a] for a in gather_over) > 1  # on one device: nothing to gather
+    params_gathered = gathered_shardings(state_sharding.params, gather_over)
+    frozen_gathered = gathered_shardings(frozen_sharding, gather_over)
 
     def loss_sum(params, frozen, micro, n_scored):
         model = nnx.merge(graphdef, cast_floats(params, compute_dtype), cast_floats(frozen, compute_dtype))
@@ -63,17 +87,26 @@ def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTran
 
     def step(state: TrainState, frozen, batch):
         n_scored = jnp.maximum(jnp.sum(batch["loss_mask"].astype(jnp.float32)), 1.0)
+        params = state.params
+        if gather_once:
+            params = jax.lax.with_sharding_constraint(cast_floats(params, compute_dtype), params_gathered)
+            frozen = jax.lax.with_sharding_constraint(cast_floats(frozen, compute_dtype), frozen_gathered)
+
+        def micro_grads(micro):
+            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec[k]) for k, v in micro.items()}
+            g, aux = grad_fn(params, frozen, micro, n_scored)
+            if gather_once:  # back to the master layout, summed in float32
+                g = jax.lax.with_sharding_constraint(cast_floats(g, jnp.float32), state_sharding.params)
+            return g, aux
 
         def micro_step(carry, micro):
             grads, nll, correct = carry
-            micro = {k: jax.lax.with_sharding_constraint(v, micro_spec[k]) for k, v in micro.items()}
-            g, (m_nll, m_correct) = grad_fn(state.params, frozen, micro, n_scored)
+            g, (m_nll, m_correct) = micro_grads(micro)
             grads = jax.tree.map(lambda a, b: a + b.astype(a.dtype), grads, g)
             return (grads, nll + m_nll, correct + m_correct), None
 
         if jax.tree.leaves(batch)[0].shape[0] == 1:  # no accumulation: no float32 gradient buffer
-            micro = {k: jax.lax.with_sharding_constraint(v[0], micro_spec[k]) for k, v in batch.items()}
-            grads, (nll, correct) = grad_fn(state.params, frozen, micro, n_scored)
+            grads, (nll, correct) = micro_grads({k: v[0] for k, v in batch.items()})
         else:
             zeros = jax.tree.map(lambda p: jnp.zeros(p.shape, jnp.float32), state.params)
             init = (zeros, jnp.zeros((), jnp.float32), jnp.zeros((), jnp.float32))
