@@ -36,7 +36,7 @@ chain)  # run.sh chain STAGES: the stages one after another (run from the snapsh
       scan) timeout 300 $TRAIN --steps 8 --set moments_dtype=bfloat16 --set scan_layers=true \
                 --out $R/scan --json $R/out/scan.jsonl > $R/out/scan.log 2>&1; echo "rc $?"
             cp $R/scan/run/metrics.jsonl $R/out/scan_metrics.jsonl; tail -2 $R/out/scan.log ;;
-      prec) [ -f $R/data/manifest.json ] || python3 -m jax3dc.cli data build --out $R/data --objects 3000 --views 1 \
+      prec) [ -f $R/data/manifest.json ] || python3 -m jax3dc.cli data build --out $R/data --objects 2000 --views 1 \
                 --size 224 --workers 16 --quiet > $R/out/build.log 2>&1
             timeout 600 python3 bench/master_precision.py --data $R/data --preset qwen3_vl_2b \
                 --settings fp32_master_fp32_moments,fp32_master_bf16_moments --out $R/prec --json $R/out/prec.jsonl \
@@ -47,6 +47,7 @@ chain)  # run.sh chain STAGES: the stages one after another (run from the snapsh
   done; echo "=== done $(date +%T)" ;;
 wait)
   end=$(( $(date +%s) + 60 * $2 ))
+  [ -f $R/chain.log ] || { echo "no chain on this machine (a fresh one: run setup and start again)"; exit 1; }
   while [ $(date +%s) -lt $end ] && ! grep -q "=== done" $R/chain.log; do sleep 10; done
   cat $R/chain.log ;;
 pack) mkdir -p "$2"; cp $R/chain.log $R/out/; tar czf "$2/train_scale.tgz" -C $R/out . ; ls -la "$2" ;;
