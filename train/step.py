@@ -69,14 +69,15 @@ def make_train_step(graphdef: nnx.GraphDef, score: Score, tx: optax.GradientTran
     With `gather_over` (the mesh axes the rows are split over, FSDP's), the weights are cast to
     the compute dtype and gathered over those axes once per step, before the micro-batches; every
     micro-batch (forward, rematerialised forward, backward) reads that copy, and its gradient is
-    reduce-scattered back to the master layout in float32. Without it each micro-batch gathers the sharded weights itself (XLA does
-    so in its forward pass and again in the rematerialised one), which costs collectives per
-    micro-batch but no gathered copy in memory. With one device over those axes both are the same
-    program (no copy is made)."""
+    reduce-scattered back to the master layout in float32. Without it each micro-batch gathers
+    the sharded weights itself (XLA does so in its forward pass and again in the rematerialised
+    one), which costs collectives per micro-batch but no gathered copy in memory. With one device
+    over those axes both are the same program (no copy is made)."""
     micro_spec = _micro_shardings(batch_sharding)
     gather_once = math.prod(mesh.shape[a] for a in gather_over) > 1  # on one device: nothing to gather
-    params_gathered = gathered_shardings(state_sharding.params, gather_over)
-    frozen_gathered = gathered_shardings(frozen_sharding, gather_over)
+    if gather_once:
+        params_gathered = gathered_shardings(state_sharding.params, gather_over)
+        frozen_gathered = gathered_shardings(frozen_sharding, gather_over)
 
     def loss_sum(params, frozen, micro, n_scored):
         model = nnx.merge(graphdef, cast_floats(params, compute_dtype), cast_floats(frozen, compute_dtype))

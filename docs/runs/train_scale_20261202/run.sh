@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# Issue 51's one-GPU figures on one GPU host (16 cores), in one chain started in its own session:
+# Issue 51's one-GPU figures on one GPU host (16 cores), in one chain started detached (setsid):
 #   layers   bench/layer_storage.py for each layout of the 4B decoder (cold compile, tokens/s)
 #   fit      `jax3dc train` 4B, fp32 master + bf16 moments, remat=full, 4 rows of 4,096 in 4
 #            micro-batches, the device pool capped at 80 GB (XLA_PYTHON_CLIENT_MEM_FRACTION), cold
 #   scan     the same command with scan_layers=true (cold), for its compile split
 #   prec     bench/master_precision.py on the 2B over a procedural build made here
 # Usage (carry .whl .gl): run.sh setup | start [STAGES] | wait MINUTES | pack OUTDIR
-# (start snapshots the tree and runs `chain` from the snapshot in its own session: every call copies the tree afresh)
+# (start snapshots the tree and runs `chain` from the snapshot, detached: every device command copies the tree afresh)
 set -uo pipefail
 R=/tmp/t51
 export PYTHONUNBUFFERED=1 PYTHONPATH=/tmp/r5/site MUJOCO_GL=egl LD_LIBRARY_PATH=/tmp/r5/gl/usr/lib/x86_64-linux-gnu:${LD_LIBRARY_PATH:-}
