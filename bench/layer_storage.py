@@ -8,7 +8,7 @@ moments, `jax.checkpoint` around each layer (the trainer's remat=full), one row 
   stacked_scan  the layers stored stacked (one leading layer axis), run as one lax.scan
   stacked_loop  stored stacked, stepped one by one over static slices
 
-    python3 bench/layer_storage.py --preset qwen3_vl_4b --layout stacked_scan --json OUT.jsonl
+    python3 bench/layer_storage.py --preset qwen3_vl_4b --layout stacked_scan [--unroll 4] --json OUT.jsonl
 
 Prints trace+lower and XLA seconds of the first compile, the step's tokens/s and peak device
 memory. One layout per process, so each compile is cold and memory starts empty.
@@ -33,6 +33,9 @@ def main() -> None:
     ap.add_argument("--layout", choices=LAYOUTS, required=True)
     ap.add_argument("--steps", type=int, default=6)
     ap.add_argument("--layers", type=int, default=0, help="> 0: this many decoder layers instead of the preset's")
+    ap.add_argument("--unroll", type=int, default=1,
+                    help="the scan layouts: layers per loop iteration (lax.scan unroll); compile grows with it, "
+                         "and XLA may fuse and schedule across the layers of one iteration")
     ap.add_argument("--compile-only", action="store_true",
                     help="lower and compile from shapes alone (no weights allocated): compile times on any machine")
     add_json_lines(ap)
@@ -102,7 +105,7 @@ def main() -> None:
             return x
         stacked = layer_params if a.layout == "stacked_scan" else jax.tree.map(
             lambda *s: jnp.stack([t.astype(jnp.bfloat16) if t.ndim >= 2 else t for t in s]), *layer_params)
-        return jax.lax.scan(lambda h, s: (body(h, s), None), x, stacked)[0]
+        return jax.lax.scan(lambda h, s: (body(h, s), None), x, stacked, unroll=a.unroll)[0]
 
     def loss_fn(p, ids):
         x = jnp.take(p["embed"], ids, axis=0).astype(jnp.bfloat16)
@@ -127,10 +130,11 @@ def main() -> None:
     t1 = time.perf_counter()
     compiled = lowered.compile()
     t2 = time.perf_counter()
-    row = {"bench": "layer_storage", "preset": a.preset, "layers": n_layers, "layout": a.layout, "seq": seq,
+    row = {"bench": "layer_storage", "preset": a.preset, "layers": n_layers, "layout": a.layout, "unroll": a.unroll, "seq": seq,
            "device": jax.devices()[0].device_kind, "trace_lower_s": t1 - t0, "xla_s": t2 - t1}
+    name = a.layout if a.unroll == 1 or not a.layout.endswith("scan") else f"{a.layout} u{a.unroll}"
     if a.compile_only:
-        print(f"{a.layout:13s} trace+lower {row['trace_lower_s']:.1f} s, XLA {row['xla_s']:.1f} s", flush=True)
+        print(f"{name:16s} trace+lower {row['trace_lower_s']:.1f} s, XLA {row['xla_s']:.1f} s", flush=True)
         append_json_lines(a.json, [row])
         return
     params, opt_state, loss = compiled(params, opt_state, ids)
@@ -143,7 +147,7 @@ def main() -> None:
     stats = jax.devices()[0].memory_stats() or {}
     row |= {"first_step_s": t3 - t2, "step_s": step_s, "tokens_per_s": seq / step_s, "loss": float(loss),
             "peak_mem_gib": stats.get("peak_bytes_in_use", 0) / 2**30}
-    print(f"{a.layout:13s} trace+lower {row['trace_lower_s']:.1f} s, XLA {row['xla_s']:.1f} s, "
+    print(f"{name:16s} trace+lower {row['trace_lower_s']:.1f} s, XLA {row['xla_s']:.1f} s, "
           f"{row['tokens_per_s']:.0f} tokens/s, peak {row['peak_mem_gib']:.1f} GiB, loss {row['loss']:.3f}", flush=True)
     append_json_lines(a.json, [row])
 
