@@ -42,8 +42,13 @@ setup)
     [ -d "$d" ] || continue
     name=$(basename "$d"); name=${name%.*}; mkdir -p $R/carry/$name; cp "$d"/* $R/carry/$name/
   done
-  # one pip call: wheels that share a package folder (mujoco, mujoco-core) must be installed together
-  [ -d $R/site/grain ] || pip install -q --no-deps --target $R/site .whl/*.whl 2>&1 | grep -v "as the 'root' user"
+  # the carried wheels (scripts/gpu_carry.sh) not installed yet, in one pip call: wheels that share a
+  # package folder (mujoco, mujoco-core) must be installed together; $R/site/.wheels lists those done
+  new=(); for w in .whl/*.whl; do grep -qxF "${w##*/}" $R/site/.wheels 2>/dev/null || new+=("$w"); done
+  if [ ${#new[@]} -gt 0 ]; then
+    pip install -q --no-deps --target $R/site "${new[@]}" 2>&1 | grep -v "as the 'root' user"
+    [ "${PIPESTATUS[0]}" -eq 0 ] && printf '%s\n' "${new[@]##*/}" >> $R/site/.wheels
+  fi
   # the `jax3dc` subcommands are entry points: without installing the project, a dist-info on the path names them
   mkdir -p $R/site/jax3dc-0.dist-info && printf 'Metadata-Version: 2.1\nName: jax3dc\nVersion: 0\n' > $R/site/jax3dc-0.dist-info/METADATA
   sed -n '/^\[project.entry-points."jax3dc.commands"\]/,/^$/p' pyproject.toml | sed 's/^\[project.entry-points."\(.*\)"\]/[\1]/; s/"//g' \
