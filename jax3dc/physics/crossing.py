@@ -14,19 +14,28 @@ that edge is no edge to pass round (a turntable swung out through the corner). T
 moving part may be the board (a door leaf swung through a handle that stays). Parts lying across
 a board's plane at rest (a sash in its frame, a shaft through its panel) are left alone. Pure numpy on the
 rest-frame meshes; joint values as in the sweep (rad / nu), every other joint at rest.
+
+A part's boards and surface points depend on its rest-frame mesh (and pieces) alone, and finding
+them (an oriented box per component and piece) was 70 % of a verdict: the K candidates of one
+object, and a repair's alternatives, share their parts, so they are kept per content digest in the
+process (``CACHE_ENTRIES`` of each), read-only, the same arrays a fresh computation gives.
 """
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 from scipy.ndimage import binary_erosion
+from scipy.spatial.transform import Rotation
 
-from jax3dc.physics.kinematics import joint_motion
 from jax3dc.physics.tolerances import CROSSING_MARGIN_NU
-from jax3dc.structure.schema import Structure
+from jax3dc.structure.schema import Joint, Structure
 
 MAX_BOARDS_PER_PART = 128  # beyond this a part counts as one component (its oriented box)
 SURFACE_SAMPLES = 600  # points per moved part
@@ -37,6 +46,7 @@ CROSSING_STEP_NU = 0.02  # largest point travel between the path states checked 
 JOIN_GAP_NU = 0.01  # a collision piece this close beyond a piece board's edge, across its thickness, continues the wall
 BOARD_MAX_THICKNESS_NU = 0.06  # thicker components are not boards: a part through them is deeper than
 # PENETRATION_TOL_NU, and a bulky concave one (a bucket as one mesh) is straddled, not crossed
+CACHE_ENTRIES = 512  # parts whose boards (and, apart, surface points) stay in memory
 
 
 @dataclass(frozen=True)
@@ -68,8 +78,8 @@ def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: d
 
     ``pieces``: per part, the vertices (object frame, nu) of its convex collision pieces; the thin
     ones are boards too (the walls of a bucket or carcass modelled as one closed mesh)."""
-    boards = {p: _boards(mesh) + _piece_boards((pieces or {}).get(p, [])) for p, mesh in parts.items()}
-    surfaces = {p: _surface(mesh) for p, mesh in parts.items()}
+    boards = {p: _mesh_boards(mesh) + _cached_piece_boards((pieces or {}).get(p, [])) for p, mesh in parts.items()}
+    surfaces = {p: _cached_surface(mesh) for p, mesh in parts.items()}
     out = {}
     for part, values in sweeps.items():
         joint = structure.nodes[part].joint
@@ -87,17 +97,20 @@ def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: d
         first: dict[float, int] = {}  # the value at which each direction's path first crosses -> part
         for end in (max(float(np.max(values)), 0.0), min(float(np.min(values)), 0.0)):
             steps = int(np.ceil(abs(end) * reach / CROSSING_STEP_NU))
-            tracks = [(p, _Track(b, points)) for p, b in candidates if not _straddles(points, b)]
-            backwards = [(p, _Track(b, surfaces[p])) for p in still for _, b in carried if not _straddles(surfaces[p], b)]
-            for v in np.linspace(0.0, end, steps + 1)[1:]:
-                posed = joint_motion(joint, float(v), points)
-                hit = next((p for p, track in tracks if track.passes_through(posed)), None)
-                if hit is None and backwards:
-                    back = {p: joint_motion(joint, -float(v), surfaces[p]) for p in {p for p, _ in backwards}}
-                    hit = next((p for p, track in backwards if track.passes_through(back[p])), None)
-                if hit is not None:
-                    first[float(v)] = hit
-                    break
+            if steps == 0:
+                continue
+            path = np.linspace(0.0, end, steps + 1)[1:]
+            posed = _path(joint, path, points)
+            hits = [(_first_crossing(b, points, posed), p) for p, b in candidates if not _straddles(points, b)]
+            if carried:
+                back = {p: _path(joint, -path, surfaces[p]) for p in still}
+                hits += [(_first_crossing(b, surfaces[p], back[p]), p)
+                         for p in still for _, b in carried if not _straddles(surfaces[p], b)]
+            # the earliest state; at one state, boards of the parts that stay before carried ones, each in order
+            crossed = [(state, n, p) for n, (state, p) in enumerate(hits) if state is not None]
+            if crossed:
+                state, _, p = min(crossed)
+                first[float(path[state])] = p
         for v in values:  # report the first of the given values that lies at or past a crossing
             past = [c for c in first if (c > 0 and v >= c - 1e-12) or (c < 0 and v <= c + 1e-12)]
             if past:
@@ -113,47 +126,116 @@ def _straddles(points: np.ndarray, board: Board) -> bool:
     return bool(t.max() > board.half[0] + FLUSH_NU and t.min() < -board.half[0] - FLUSH_NU)
 
 
-class _Track:
-    """Which side of a board each point was last seen clearly beyond (CROSSING_MARGIN_NU past a
-    face, or outside it at all at rest), and where: a point next seen beyond the other face went through the board's plane in
-    between, over the board's material if the line between the two sightings meets it there."""
+def _path(joint: Joint, values: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """[len(values), n, 3]: ``points`` moved by ``joint`` to each value (``joint_motion`` at once)."""
+    axis = np.asarray(joint.axis, dtype=np.float64)
+    axis = axis / np.linalg.norm(axis)
+    if joint.type == "slide":
+        return points[None] + values[:, None, None] * axis
+    pivot = np.asarray(joint.pivot, dtype=np.float64)
+    turns = Rotation.from_rotvec(values[:, None] * axis).as_matrix()
+    return (points - pivot) @ turns.transpose(0, 2, 1) + pivot
 
-    def __init__(self, board: Board, points: np.ndarray):
-        self.board = board
-        self.limit = board.half[0] + CROSSING_MARGIN_NU
-        local = self._local(points)
-        # at rest a point on a face (a lid lying on its box) already counts as on that side
-        self.side = np.where(np.abs(local[:, 0]) > board.half[0], np.sign(local[:, 0]), 0).astype(int)
-        self.seen = local
 
-    def _local(self, points: np.ndarray) -> np.ndarray:
-        return (points - self.board.centre) @ self.board.axes.T
+def _first_crossing(board: Board, rest: np.ndarray, posed: np.ndarray) -> int | None:
+    """The first state of ``posed`` [S, n, 3] (the points ``rest`` [n, 3] along a path) at which
+    one of them passes through ``board``; None: none does.
 
-    def _side_of(self, local: np.ndarray) -> np.ndarray:
-        return np.where(local[:, 0] > self.limit, 1, np.where(local[:, 0] < -self.limit, -1, 0))
+    Each point's side is where it was last seen clearly beyond a face (CROSSING_MARGIN_NU past it,
+    or outside the board at all at rest); a point next seen beyond the other face went through the
+    board's plane in between, over its material if the line between the two sightings meets the
+    plane over a covered cell, inside the insets of the board's edges."""
+    centre, axes, half = board.centre, board.axes, board.half
+    limit = half[0] + CROSSING_MARGIN_NU
+    at_rest = (rest - centre) @ axes.T
+    thin = (posed - centre) @ axes[0]  # [S, n]
+    side = np.where(thin > limit, 1, np.where(thin < -limit, -1, 0))
+    # row 0 is the rest pose: every point is seen there, on a side only if outside the board at all
+    sides = np.concatenate([np.where(np.abs(at_rest[:, 0]) > half[0], np.sign(at_rest[:, 0]), 0)[None].astype(int), side])
+    rows = np.arange(len(sides))[:, None]
+    last = np.maximum.accumulate(np.where(np.concatenate([np.ones_like(side[:1], bool), side != 0]), rows, 0), axis=0)
+    before = last[:-1]  # per state, the row each point was last seen in
+    was = np.take_along_axis(sides, before, axis=0)
+    state, point = np.nonzero((side != 0) & (was != 0) & (side != was))
+    if not len(state):
+        return None
+    seen = before[state, point]
+    a = np.where((seen == 0)[:, None], at_rest[point], (posed[np.maximum(seen - 1, 0), point] - centre) @ axes.T)
+    b = (posed[state, point] - centre) @ axes.T
+    w = (a[:, 0] / (a[:, 0] - b[:, 0]))[:, None]
+    met = a[:, 1:] + w * (b[:, 1:] - a[:, 1:])  # where each point met the mid-plane
+    inside = np.all((met >= -half[1:] + board.inset[:, 0]) & (met <= half[1:] - board.inset[:, 1]), axis=1)
+    cell = np.clip(np.floor((met + half[1:]) / CROSSING_CELL_NU).astype(int), 0, np.array(board.covered.shape) - 1)
+    through = inside & board.covered[cell[:, 0], cell[:, 1]]
+    return int(state[through].min()) if through.any() else None
 
-    def passes_through(self, points: np.ndarray) -> bool:
-        local = self._local(points)
-        side = self._side_of(local)
-        flips = (side != 0) & (self.side != 0) & (side != self.side)
-        crossed = False
-        if flips.any():
-            a, b = self.seen[flips], local[flips]
-            w = (a[:, 0] / (a[:, 0] - b[:, 0]))[:, None]
-            at = a[:, 1:] + w * (b[:, 1:] - a[:, 1:])  # where each point met the mid-plane
-            half, inset = self.board.half[1:], self.board.inset
-            inside = np.all((at >= -half + inset[:, 0]) & (at <= half - inset[:, 1]), axis=1)
-            crossed = bool(inside.any()) and bool(np.any(self.board.covered & self.board.cells_of(at[inside])))
-        seen = side != 0
-        self.side = np.where(seen, side, self.side)
-        self.seen = np.where(seen[:, None], local, self.seen)
-        return crossed
+
+_cache: OrderedDict[bytes, object] = OrderedDict()
+_cache_lock = threading.Lock()
+
+
+def _memo(kind: str, arrays: Sequence[np.ndarray], compute: Callable[[], object]) -> object:
+    """``compute()``, once per ``kind``, content of ``arrays`` and the module's constants (read at
+    call time, so a changed constant never returns older boards) in this process."""
+    digest = hashlib.blake2b(kind.encode(), digest_size=32)
+    digest.update(np.asarray([MAX_BOARDS_PER_PART, SURFACE_SAMPLES, MIN_BOARD_NU, CROSSING_CELL_NU, FLUSH_NU,
+                              JOIN_GAP_NU, BOARD_MAX_THICKNESS_NU, CROSSING_MARGIN_NU], dtype=np.float64).tobytes())
+    for array in arrays:
+        array = np.ascontiguousarray(array)
+        digest.update(f"{array.dtype.str}{array.shape}".encode())
+        digest.update(array.tobytes())
+    key = digest.digest()
+    with _cache_lock:
+        if key in _cache:
+            _cache.move_to_end(key)
+            return _cache[key]
+    value = compute()
+    with _cache_lock:
+        _cache[key] = value
+        while len(_cache) > 2 * CACHE_ENTRIES:
+            _cache.popitem(last=False)
+    return value
+
+
+def _read_only(*arrays: np.ndarray) -> None:
+    for array in arrays:
+        array.setflags(write=False)
+
+
+def _shared_boards(boards: list[Board]) -> tuple[Board, ...]:
+    for b in boards:
+        _read_only(b.centre, b.axes, b.half, b.covered, b.inset)
+    return tuple(boards)
+
+
+def _mesh_key(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)
+
+
+def _mesh_boards(mesh: trimesh.Trimesh) -> list[Board]:
+    """``_boards(mesh)``, shared (see the module docstring)."""
+    return list(_memo("boards", _mesh_key(mesh), lambda: _shared_boards(_boards(mesh))))
+
+
+def _cached_piece_boards(pieces: list[np.ndarray]) -> list[Board]:
+    """``_piece_boards(pieces)``, shared: keyed by every piece, since each board's edges depend on the others."""
+    arrays = [np.asarray(v, dtype=np.float64) for v in pieces]
+    return list(_memo("piece boards", arrays, lambda: _shared_boards(_piece_boards(arrays))))
+
+
+def _cached_surface(mesh: trimesh.Trimesh) -> np.ndarray:
+    """``_surface(mesh)``, shared and read-only."""
+    def compute() -> np.ndarray:
+        points = _surface(mesh)
+        _read_only(points)
+        return points
+    return _memo("surface", _mesh_key(mesh), compute)
 
 
 def _surface(mesh: trimesh.Trimesh) -> np.ndarray:
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     if not len(mesh.faces):
-        return vertices
+        return vertices.copy()
     return np.concatenate([vertices[:: max(1, len(vertices) // SURFACE_SAMPLES)],
                            np.asarray(mesh.sample(SURFACE_SAMPLES, seed=0), dtype=np.float64)])
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from jax3dc.physics.crossing import crossings
+from jax3dc.physics.crossing import _mesh_boards, _path, crossings
+from jax3dc.physics.kinematics import joint_motion
 from jax3dc.structure.schema import Joint, Node, Structure
 
 
@@ -43,3 +44,29 @@ def test_part_that_crosses_at_rest_is_left_alone():
     pin = _plate([0.03, 0.03, 0.3], [0.0, 0.37, 0.0])
     structure, parts = _box_with_lid(pin)
     assert crossings(structure, parts, {2: np.linspace(0.0, 0.3, 5)}) == {}
+
+
+def test_path_poses_points_as_joint_motion_does_one_value_at_a_time():
+    # the whole path at once must be the per-value motion (scipy's rotation), for both joint kinds
+    points = np.random.default_rng(0).uniform(-1.0, 1.0, (50, 3))
+    values = np.linspace(-2.0, 2.0, 7)
+    for joint in (Joint("hinge", (0.3, -1.0, 0.2), (0.1, 0.4, -0.2), (-2.0, 2.0)),
+                  Joint("slide", (0.0, 0.0, 2.0), (0.0, 0.0, 0.0), (-2.0, 2.0))):
+        path = _path(joint, values, points)
+        for v, posed in zip(values, path):
+            np.testing.assert_allclose(posed, joint_motion(joint, float(v), points), atol=1e-12)
+
+
+def test_boards_shared_between_calls_are_read_only_and_give_the_same_answer():
+    # the K candidates of an object share its parts' boards: a cached board must not be writable,
+    # and the second call (a hit) must answer as the first (computed)
+    structure, parts = _box_with_lid()
+    wrong = -np.linspace(0.0, 1.5, 9)
+    first = crossings(structure, parts, {2: wrong})
+    boards = _mesh_boards(parts[1])
+    assert boards and not boards[0].covered.flags.writeable and not boards[0].centre.flags.writeable
+    assert crossings(structure, parts, {2: wrong}) == first
+    # a copy of the mesh moved by a hair is another key: its boards are its own
+    moved = parts[1].copy()
+    moved.apply_translation([0.0, 0.0, 1e-6])
+    assert _mesh_boards(moved)[0].centre[2] != boards[0].centre[2]
