@@ -50,6 +50,7 @@ def test_forward_kinematics_equal_c_mujoco():
 
 
 GROUP = 7  # objects per launch
+EXACT_EVERY = 4  # objects also checked alone at their exact sizes (a compile each)
 SWEEP_LIKE = Shapes(objects=8, bodies=48, geoms=192, pairs=1536, nq=48, items=1024)  # beyond what a group needs, as a sweep pads
 
 
@@ -62,8 +63,10 @@ def _objects():
 
 def test_padding_and_batching_change_no_verdict():
     """Every factory category and fixture: seven objects a launch, padded to size classes and
-    beyond (a sweep pads to the largest shapes it has met), against each alone at its exact sizes.
-    Depths agree to float32 rounding (0.01 mm), and the kinematic verdicts they give are identical."""
+    beyond (a sweep pads to the largest shapes it has met), against every EXACT_EVERY-th object
+    alone at its exact sizes (each such launch compiles; all 49 alone took ~4 minutes of a 2-core
+    suite; MJX's kinematic verdicts are compared with C's in test_physics_mjx_broadphase). Depths agree to float32 rounding (0.01 mm), and the kinematic
+    verdicts they give are identical."""
     objects = _objects()
     assert len(objects) >= 45
     sims, states, arrays = [], [], []
@@ -74,24 +77,29 @@ def test_padding_and_batching_change_no_verdict():
         sims.append(kinematic)
         states.append(check_states(kinematic))
         arrays.append(object_arrays(bare.model))
-    padded = []
-    for start in range(0, len(objects), GROUP):  # groups bound the memory of the broad phase on a CPU
-        group = slice(start, start + GROUP)
-        distances, shapes = batch_pair_distances(arrays[group], [s.qpos for s in states[group]], SWEEP_LIKE)
-        assert shapes.objects == SWEEP_LIKE.objects and shapes.items >= sum(len(s.qpos) for s in states[group])
-        padded += distances
+
+    def launched(order: list[int]) -> dict[int, np.ndarray]:
+        out = {}
+        for start in range(0, len(order), GROUP):  # groups bound the memory of the broad phase on a CPU
+            group = order[start:start + GROUP]
+            distances, shapes = batch_pair_distances([arrays[i] for i in group], [states[i].qpos for i in group], SWEEP_LIKE)
+            assert shapes.objects == SWEEP_LIKE.objects and shapes.items >= sum(len(states[i].qpos) for i in group)
+            out.update(zip(group, distances))
+        return out
+
+    batched = launched(list(range(len(objects))))
     penetrating = 0
-    for obj, sim, state, one, batched in zip(objects, sims, states, arrays, padded):
-        alone, exact = batch_pair_distances([one], [state.qpos], EXACT, size_classes=False)
-        assert exact.bodies == one.nbody and exact.pairs == max(1, len(one.pairs)), obj.name
-        alone = alone[0]
+    for n in range(0, len(objects), EXACT_EVERY):
+        obj, sim, state, one = objects[n], sims[n], states[n], arrays[n]
+        (alone,), shapes = batch_pair_distances([one], [state.qpos], EXACT, size_classes=False)
+        assert shapes.bodies == one.nbody and shapes.pairs == max(1, len(one.pairs)), obj.name
         # depth in metres, 0 where apart; faces that touch (depth ~1e-8 m) may fall either side of 0 in float32
-        depth = [np.minimum(np.where(np.isfinite(d), d, 0.0), 0.0) for d in (alone, batched)]
+        depth = [np.minimum(np.where(np.isfinite(d), d, 0.0), 0.0) for d in (alone, batched[n])]
         np.testing.assert_allclose(depth[1], depth[0], atol=1e-5, err_msg=obj.name)  # 0.01 mm: float32 sums in another order
         penetrating += int((depth[0] < -1e-4).sum())
         proximity_stub = np.where(np.isfinite(alone), alone, -1.0)  # every pair touching: the detachment checks stay quiet
         verdicts = [json.dumps(run_checks(CheckRun(obj.structure, obj.parts, sim, state, d, proximity_stub, None, False),
                                           KINEMATIC_CHECKS).to_json())
-                    for d in (alone, batched)]
+                    for d in (alone, batched[n])]
         assert verdicts[0] == verdicts[1], obj.name
-    assert penetrating > 1000  # the objects interpenetrate here and there: the comparison covers real contacts
+    assert penetrating > 150, penetrating  # 210 over these 13 objects: the comparison covers real contacts
