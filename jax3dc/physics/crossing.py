@@ -18,7 +18,8 @@ rest-frame meshes; joint values as in the sweep (rad / nu), every other joint at
 A part's boards and surface points depend on its rest-frame mesh (and pieces) alone, and finding
 them (an oriented box per component and piece) was 70 % of a verdict: the K candidates of one
 object, and a repair's alternatives, share their parts, so they are kept per content digest in the
-process (``CACHE_ENTRIES`` of each), read-only, the same arrays a fresh computation gives.
+process (the last ``CACHE_ENTRIES`` parts: three entries each, its mesh's boards, its pieces' boards and
+its surface points), read-only, the same arrays a fresh computation gives.
 """
 
 from __future__ import annotations
@@ -192,7 +193,7 @@ def _memo(kind: str, arrays: Sequence[np.ndarray], compute: Callable[[], object]
     value = compute()
     with _cache_lock:
         _cache[key] = value
-        while len(_cache) > 2 * CACHE_ENTRIES:
+        while len(_cache) > 3 * CACHE_ENTRIES:
             _cache.popitem(last=False)
     return value
 
