@@ -78,13 +78,13 @@ def token_nll(model: Qwen3VL, rows: list[dict]) -> list[np.ndarray]:
     return out
 
 
-@pytest.mark.parametrize("mixed", [False, True], ids=["structure", "structure+code"])
-def test_packed_loss_equals_unpacked(setup, code_examples, mixed: bool) -> None:
-    """Per-token NLL of every example is the same in one packed row and in rows of its own, also
-    when a row mixes code examples (one image) with structure examples (two)."""
+def test_packed_loss_equals_unpacked(setup, code_examples) -> None:
+    """Per-token NLL of every example is the same in one packed row and in rows of its own, in a
+    row that mixes code examples (one image) with structure examples (two). (A structure-only row
+    checked the same ~50 s over again: its examples are a subset of this row's kinds.)"""
     cfg, tok, _, examples = setup
-    if mixed:  # one-image examples first, between and last: image slots are filled in order
-        examples = [code_examples[0], examples[0], code_examples[1], examples[1]]
+    # one-image examples first, between and last: image slots are filled in order
+    examples = [code_examples[0], examples[0], code_examples[1], examples[1]]
     model = Qwen3VL(cfg, rngs=nnx.Rngs(3))
     total = sum(len(e) for e in examples)
     packed = pack_row(examples, layout_for(cfg, tok, total + 7, len(examples)))
