@@ -47,7 +47,7 @@ CROSSING_STEP_NU = 0.02  # largest point travel between the path states checked 
 JOIN_GAP_NU = 0.01  # a collision piece this close beyond a piece board's edge, across its thickness, continues the wall
 BOARD_MAX_THICKNESS_NU = 0.06  # thicker components are not boards: a part through them is deeper than
 # PENETRATION_TOL_NU, and a bulky concave one (a bucket as one mesh) is straddled, not crossed
-CACHE_ENTRIES = 512  # parts whose boards (and, apart, surface points) stay in memory
+CACHE_ENTRIES = 512  # parts whose boards and surface points stay in memory (see the module docstring)
 
 
 @dataclass(frozen=True)

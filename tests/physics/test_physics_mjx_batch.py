@@ -64,9 +64,9 @@ def _objects():
 def test_padding_and_batching_change_no_verdict():
     """Every factory category and fixture: seven objects a launch, padded to size classes and
     beyond (a sweep pads to the largest shapes it has met), against every EXACT_EVERY-th object
-    alone at its exact sizes (each such launch compiles; all 49 alone took ~4 minutes of a 2-core
-    suite; MJX's kinematic verdicts are compared with C's in test_physics_mjx_broadphase). Depths agree to float32 rounding (0.01 mm), and the kinematic
-    verdicts they give are identical."""
+    alone at its exact sizes (each such launch compiles: all 49 alone took ~4 minutes of a 2-core
+    suite; MJX's kinematic verdicts are compared with C's in test_physics_mjx_broadphase). Depths
+    agree to float32 rounding (0.01 mm), and the kinematic verdicts they give are identical."""
     objects = _objects()
     assert len(objects) >= 45
     sims, states, arrays = [], [], []
@@ -78,16 +78,12 @@ def test_padding_and_batching_change_no_verdict():
         states.append(check_states(kinematic))
         arrays.append(object_arrays(bare.model))
 
-    def launched(order: list[int]) -> dict[int, np.ndarray]:
-        out = {}
-        for start in range(0, len(order), GROUP):  # groups bound the memory of the broad phase on a CPU
-            group = order[start:start + GROUP]
-            distances, shapes = batch_pair_distances([arrays[i] for i in group], [states[i].qpos for i in group], SWEEP_LIKE)
-            assert shapes.objects == SWEEP_LIKE.objects and shapes.items >= sum(len(states[i].qpos) for i in group)
-            out.update(zip(group, distances))
-        return out
-
-    batched = launched(list(range(len(objects))))
+    batched = []
+    for start in range(0, len(objects), GROUP):  # groups bound the memory of the broad phase on a CPU
+        group = slice(start, start + GROUP)
+        distances, shapes = batch_pair_distances(arrays[group], [s.qpos for s in states[group]], SWEEP_LIKE)
+        assert shapes.objects == SWEEP_LIKE.objects and shapes.items >= sum(len(s.qpos) for s in states[group])
+        batched += distances
     penetrating = 0
     for n in range(0, len(objects), EXACT_EVERY):
         obj, sim, state, one = objects[n], sims[n], states[n], arrays[n]
