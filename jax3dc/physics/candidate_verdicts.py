@@ -9,6 +9,9 @@ then come from one ``mjx_batch`` launch, padded to at least ``START_SHAPES`` and
 shapes this process has met, so a run over many objects compiles only when a larger object comes.
 In a worker process of a device service (``mjx_service``, as ``physics sweep --backend mjx`` runs
 it) the structures go to the service instead, which launches the requests of all its workers together.
+On an accelerator the board-crossing queries of every structure (``verdict.crossing_plan_of``, the
+largest CPU share of a C verdict) go with them, to one ``crossing_batch`` launch; on a CPU numpy
+answers them faster, in the checks.
 The rollouts of the dynamic checks run in C, as ``physics sweep --backend mjx`` runs them: each
 structure's reachability model has its own contact pairs, which MJX keeps static, so they cannot
 share a compiled launch, and they are a small share of a verdict (``verify.verdicts``).
@@ -37,37 +40,51 @@ import trimesh
 from jax3dc.physics import cpu_backend
 from jax3dc.physics.findings import Verdict
 from jax3dc.physics.mjx_service import installed_client
-from jax3dc.physics.verdict import check_names, kinematic_inputs, penetration_model, verdict_from
+from jax3dc.physics.verdict import check_names, crossing_plan_of, kinematic_inputs, penetration_model, verdict_from
 from jax3dc.structure.schema import Structure
 
-# On an accelerator the first launch of a process is padded to these (8 candidates of a factory
-# object, or a repair's alternatives, fit them: up to 26 bodies, 1,536 geom pairs and ~100 states a
-# structure), so that the shapes seldom grow. On a CPU padding costs compute in proportion (8
-# cabinet candidates: 2.7 s of broad phase padded so, on 2 cores), so launches start at the size
-# classes they need and grow from there.
-START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=1024, hulls=(64, 384),
-                    hull_sizes=((8, 12, 12), (32, 64, 96)))
+# On an accelerator the first launch of a process is padded to these (the largest a device
+# service's batches of 16 factory candidates reached over 200 objects, narrow-phase capacity aside),
+# so that the shapes seldom grow; the narrow phase computes only the entries a launch holds, so its
+# capacity costs nothing. On a CPU padding costs compute in proportion (8 cabinet candidates: 2.7 s
+# of broad phase padded so, on 2 cores), so launches start at the size classes they need and grow.
+START_SHAPES = dict(objects=16, bodies=32, geoms=192, pairs=6144, nq=32, items=2048, hulls=(128, 1536),
+                    hull_sizes=((8, 12, 24), (32, 64, 96)), capacity=65536)
 
 
 def start_shapes() -> dict:
     """What a process's first candidate launch is padded to on this platform (``mjx_batch.Shapes``
     fields; none on a CPU: the size classes the launch needs)."""
+    return {} if jax_on_cpu() else START_SHAPES
+
+
+def device_crossings() -> bool:
+    """Whether this platform's launches answer the crossing queries too: on an accelerator (on a
+    CPU numpy answers them faster: 1.6 s against 4.3 s for 19 candidates' 736 queries, warm)."""
+    return not jax_on_cpu()
+
+
+def jax_on_cpu() -> bool:
+    """JAX's default backend is the CPU."""
     import jax  # lazy: jax (0.39 s) stays out of the CPU physics path, which loads none of it
 
-    return {} if jax.default_backend() == "cpu" else START_SHAPES
+    return jax.default_backend() == "cpu"
 
 
 _largest = None  # mjx_batch.Shapes: the largest this process has launched (every launch pads to it)
+_largest_crossings = None  # crossing_batch.CrossingShapes: the same for crossing launches
 _lock = threading.Lock()
 
 
 def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh.Trimesh], scale: float, mounted: bool,
                        dynamics: bool = True, threads: int | None = None,
-                       timings: dict[str, float] | None = None) -> list[Verdict]:
+                       timings: dict[str, float] | None = None, crossings: bool | None = None) -> list[Verdict]:
     """One verdict per structure (in order) over ``parts`` (nu, ``scale`` metres per nu), the
     interpenetration of all of them measured in one MJX launch. ``threads``: C rollout threads;
-    ``timings`` gathers seconds per step: the CPU's "kinematic inputs", "penetration models" and
-    "checks" (rollouts included), and the launch's phases (``mjx_batch.batch_pair_distances``)."""
+    ``timings`` gathers seconds per step: the CPU's "kinematic inputs", "penetration models",
+    "crossing plans" and "checks" (rollouts included), and the launches' phases
+    (``mjx_batch.batch_pair_distances``, "crossings"); ``crossings``: answer the crossing queries in
+    the launch (default: in a service's worker as the service says, else on an accelerator)."""
     if not structures:
         return []
     names = check_names(None, dynamics)
@@ -76,10 +93,19 @@ def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh
     clock.lap("kinematic inputs")
     models = [penetration_model(s, parts, i) for s, i in zip(structures, inputs)]
     clock.lap("penetration models")
-    distances = _launch(models, [i.states.qpos for i in inputs], timings)
+    service = installed_client()
+    if crossings is None:
+        crossings = service.crossings if service is not None else device_crossings()
+    plans = None
+    if crossings and "joints" in names:
+        plans = [crossing_plan_of(s, parts, i.sim, i.states) for s, i in zip(structures, inputs)]
+        clock.lap("crossing plans")
+    distances, first = _launch(models, [i.states.qpos for i in inputs], plans, timings)
     clock.lap()
+    crossed = [None] * len(structures) if plans is None else [p.resolve(f) for p, f in zip(plans, first)]
     rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
-    verdicts = [verdict_from(s, parts, i, d, rollout, mounted, names)[0] for s, i, d in zip(structures, inputs, distances)]
+    verdicts = [verdict_from(s, parts, i, d, rollout, mounted, names, c)[0]
+                for s, i, d, c in zip(structures, inputs, distances, crossed)]
     clock.lap("checks")
     return verdicts
 
@@ -97,21 +123,28 @@ class _Clock:
         self.last = now
 
 
-def _launch(models: list, qpos: list[np.ndarray], timings: dict[str, float] | None) -> list[np.ndarray]:
-    """In a worker of a device service (``mjx_service``), the service's launch, shared with the other
-    workers' requests; else one launch in this process."""
-    global _largest
+def _launch(models: list, qpos: list[np.ndarray], plans: list | None,
+            timings: dict[str, float] | None) -> tuple[list[np.ndarray], list | None]:
+    """The distances of ``models`` at ``qpos`` and, with ``plans``, their crossing queries' first
+    states: in a worker of a device service (``mjx_service``), the service's launches, shared with
+    the other workers' requests; else launches in this process."""
+    global _largest, _largest_crossings
 
     service = installed_client()
     if service is not None:
-        return service.many(models, qpos)
+        return service.many_with_crossings(models, qpos, plans) if plans is not None else (service.many(models, qpos), None)
     # lazy: MJX and jax (0.46 s), for a launch in this process only
+    from jax3dc.physics.crossing_batch import CrossingShapes, START_SHAPES as CROSSING_START, batch_first_crossings
     from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
 
     with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use
         warnings.simplefilter("ignore", UserWarning)
         arrays = [object_arrays(m) for m in models]
+    first = None
     with _lock:
         at_least = _largest or Shapes(**start_shapes())
         distances, _largest = batch_pair_distances(arrays, qpos, at_least, timings)
-    return distances
+        if plans is not None:
+            start = CrossingShapes() if jax_on_cpu() else CROSSING_START
+            first, _largest_crossings = batch_first_crossings(plans, _largest_crossings or start, timings)
+    return distances, first

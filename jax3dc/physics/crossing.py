@@ -70,6 +70,62 @@ class Board:
         return grid
 
 
+@dataclass(frozen=True)
+class Track:
+    """Points carried along one joint path: rest points [n, 3] (object frame, nu) and the joint's
+    values [S] from just past rest outwards (the path's states; rest is not among them)."""
+
+    joint: Joint
+    values: np.ndarray
+    rest: np.ndarray
+
+    def posed(self) -> np.ndarray:
+        """[S, n, 3]: the points at each state (``_path``)."""
+        return _path(self.joint, self.values, self.rest)
+
+
+@dataclass(frozen=True)
+class Direction:
+    """One direction of one jointed part's sweep: its path's values and the (query, other part)
+    pairs checked along it, in the order that breaks a tie at one state (boards of the parts that
+    stay first, then the carried ones)."""
+
+    part: int
+    path: np.ndarray
+    hits: tuple[tuple[int, int], ...]
+
+
+@dataclass(frozen=True)
+class CrossingPlan:
+    """What ``crossings`` computes, as data: the tracks, the (track, board) queries whose first
+    crossing state decides it, and how those states become the answer (``resolve``). The queries
+    are the whole numeric cost, so a batched evaluator (``crossing_batch``) can answer those of
+    many plans at once."""
+
+    tracks: tuple[Track, ...]
+    queries: tuple[tuple[int, Board], ...]  # (index into tracks, board)
+    directions: tuple[Direction, ...]
+    sweeps: dict[int, np.ndarray]
+
+    def resolve(self, first: Sequence[int | None]) -> dict[int, tuple[int, float]]:
+        """``crossings``' answer given each query's first crossing state (None: never)."""
+        reached: dict[int, dict[float, int]] = {}  # per part: the value at which each direction first crosses -> part
+        for d in self.directions:
+            crossed = [(first[q], n, p) for n, (q, p) in enumerate(d.hits) if first[q] is not None]
+            if crossed:
+                state, _, p = min(crossed)
+                reached.setdefault(d.part, {})[float(d.path[state])] = p
+        out = {}
+        for part, values in self.sweeps.items():
+            at = reached.get(part, {})
+            for v in values:  # the first of the given values that lies at or past a crossing
+                past = [c for c in at if (c > 0 and v >= c - 1e-12) or (c < 0 and v <= c + 1e-12)]
+                if past:
+                    out[part] = (at[past[0]], float(v))
+                    break
+        return out
+
+
 def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: dict[int, np.ndarray],
               pieces: dict[int, list[np.ndarray]] | None = None) -> dict[int, tuple[int, float]]:
     """Per jointed part: (other part, joint value) of the first value of its sweep (in the given
@@ -79,9 +135,30 @@ def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: d
 
     ``pieces``: per part, the vertices (object frame, nu) of its convex collision pieces; the thin
     ones are boards too (the walls of a bucket or carcass modelled as one closed mesh)."""
+    plan = crossing_plan(structure, parts, sweeps, pieces)
+    return plan.resolve(first_crossings(plan))
+
+
+def first_crossings(plan: CrossingPlan) -> list[int | None]:
+    """Each query's first crossing state, in numpy (each track posed once)."""
+    posed: dict[int, np.ndarray] = {}
+    out = []
+    for t, board in plan.queries:
+        if t not in posed:
+            posed[t] = plan.tracks[t].posed()
+        out.append(_first_crossing(board, plan.tracks[t].rest, posed[t]))
+    return out
+
+
+def crossing_plan(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: dict[int, np.ndarray],
+                  pieces: dict[int, list[np.ndarray]] | None = None) -> CrossingPlan:
+    """The tracks and queries of ``crossings`` (its arguments), boards and surfaces found (or read
+    from this process's cache) on the way."""
     boards = {p: _mesh_boards(mesh) + _cached_piece_boards((pieces or {}).get(p, [])) for p, mesh in parts.items()}
     surfaces = {p: _cached_surface(mesh) for p, mesh in parts.items()}
-    out = {}
+    tracks: list[Track] = []
+    queries: list[tuple[int, Board]] = []
+    directions: list[Direction] = []
     for part, values in sweeps.items():
         joint = structure.nodes[part].joint
         moved = structure.subtree(part)
@@ -95,29 +172,29 @@ def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: d
             continue
         everything = np.concatenate([points] + [surfaces[p] for p in still]) if carried else points
         reach = float(np.max(np.linalg.norm(everything - np.asarray(joint.pivot), axis=1))) if joint.type == "hinge" else 1.0
-        first: dict[float, int] = {}  # the value at which each direction's path first crosses -> part
         for end in (max(float(np.max(values)), 0.0), min(float(np.min(values)), 0.0)):
             steps = int(np.ceil(abs(end) * reach / CROSSING_STEP_NU))
             if steps == 0:
                 continue
             path = np.linspace(0.0, end, steps + 1)[1:]
-            posed = _path(joint, path, points)
-            hits = [(_first_crossing(b, points, posed), p) for p, b in candidates if not _straddles(points, b)]
+            hits = []
+
+            def query(track: int, board: Board, other: int) -> None:
+                hits.append((len(queries), other))
+                queries.append((track, board))
+
+            tracks.append(Track(joint, path, points))
+            for p, b in candidates:
+                if not _straddles(points, b):
+                    query(len(tracks) - 1, b, p)
             if carried:
-                back = {p: _path(joint, -path, surfaces[p]) for p in still}
-                hits += [(_first_crossing(b, surfaces[p], back[p]), p)
-                         for p in still for _, b in carried if not _straddles(surfaces[p], b)]
-            # the earliest state; at one state, boards of the parts that stay before carried ones, each in order
-            crossed = [(state, n, p) for n, (state, p) in enumerate(hits) if state is not None]
-            if crossed:
-                state, _, p = min(crossed)
-                first[float(path[state])] = p
-        for v in values:  # report the first of the given values that lies at or past a crossing
-            past = [c for c in first if (c > 0 and v >= c - 1e-12) or (c < 0 and v <= c + 1e-12)]
-            if past:
-                out[part] = (first[past[0]], float(v))
-                break
-    return out
+                for p in still:
+                    tracks.append(Track(joint, -path, surfaces[p]))
+                    for _, b in carried:
+                        if not _straddles(surfaces[p], b):
+                            query(len(tracks) - 1, b, p)
+            directions.append(Direction(part, path, tuple(hits)))
+    return CrossingPlan(tuple(tracks), tuple(queries), tuple(directions), sweeps)
 
 
 def _straddles(points: np.ndarray, board: Board) -> bool:

@@ -2,9 +2,11 @@
 the CPU and send their kinematic states here; the main process gathers the requests that arrive
 together into one ``mjx_batch`` launch and sends each worker its distances back.
 
-The CPU work of a check (collision pieces, board crossings, guides, rollouts) stays in the
-workers, so the accelerator is fed by every core while it runs the interpenetration sweep of many
-objects at once. A batch is closed when ``batch_objects`` requests are in or ``wait_s`` has passed
+The CPU work of a check (collision pieces, guides, rollouts) stays in the workers, so the
+accelerator is fed by every core while it runs the interpenetration sweep of many objects at once.
+A candidate set's board-crossing queries (``crossing.crossing_plan``) come as one request of their
+own when the service takes them (``crossings``: on an accelerator), answered by a
+``crossing_batch`` launch over every such request of the batch. A batch is closed when ``batch_objects`` requests are in or ``wait_s`` has passed
 since the first; a failed launch is sent back to each of its workers as the error. Launches are padded
 to the largest shapes met so far (``mjx_batch.Shapes``), so the sweep compiles only when they grow.
 """
@@ -55,10 +57,12 @@ class DeviceService:
     """Queues between sweep workers and the accelerator; ``serve`` runs in a thread of the main process."""
 
     def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05,
-                 start_shapes: dict | None = None):
+                 start_shapes: dict | None = None, crossings: bool = False):
         """``start_shapes``: what the first launch is padded to (``mjx_batch.Shapes`` fields;
-        default SWEEP_START_SHAPES)."""
+        default SWEEP_START_SHAPES); ``crossings``: the workers send their candidate sets'
+        crossing queries here (on a CPU numpy answers them faster in the worker)."""
         self.start_shapes = SWEEP_START_SHAPES if start_shapes is None else start_shapes
+        self.crossings = crossings
         self.requests = context.Queue()
         self.replies = [context.Queue() for _ in range(workers)]
         self.next_worker = context.Value("i", 0)
@@ -67,16 +71,17 @@ class DeviceService:
 
     def worker_args(self) -> tuple:
         """The initializer arguments of a worker process (``init_worker``)."""
-        return self.requests, self.replies, self.next_worker
+        return self.requests, self.replies, self.next_worker, self.crossings
 
     def serve(self, stop: threading.Event) -> None:
         # lazy: MJX and jax (0.46 s); the CPU physics path imports this module (candidate_verdicts) and loads neither
-        from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances
+        from jax3dc.physics.mjx_batch import Shapes
+        from jax3dc.physics.crossing_batch import START_SHAPES, CrossingShapes
 
         clock = CompileClock()
         # the largest met so far: every launch is padded to it, so compiles happen only as it grows
-        shapes = Shapes(**self.start_shapes)
-        self.stats.shapes = shapes
+        shapes = [Shapes(**self.start_shapes), START_SHAPES if self.crossings and self.start_shapes else CrossingShapes()]
+        self.stats.shapes = shapes[0]
         while not stop.is_set():
             try:
                 batch = [self.requests.get(timeout=0.1)]
@@ -89,20 +94,49 @@ class DeviceService:
                 except queue.Empty:
                     break
             start = time.perf_counter()
-            try:
-                results, shapes = batch_pair_distances([arrays for _, arrays, _ in batch], [q for _, _, q in batch], shapes,
-                                                       self.stats.phases)
-            except Exception as error:  # noqa: BLE001  (sent back: the worker raises it for its object)
-                results = [error] * len(batch)
-            self.stats.shapes = shapes
-            self.stats.launches += 1
-            self.stats.objects += len(batch)
-            self.stats.items += sum(len(q) for _, _, q in batch)
+            results = self._launch(batch, shapes)
+            self.stats.shapes = shapes[0]
             self.stats.device_s += time.perf_counter() - start
             compiled = clock.elapsed()
             self.stats.compiles, self.stats.compile_s = int(compiled["compiles"]), compiled["xla_s"]
             for (worker, _, _), result in zip(batch, results):
                 self.replies[worker].put(result)
+
+    def _launch(self, batch: list[tuple], shapes: list) -> list:
+        """The replies to ``batch``'s requests, in its order: one penetration launch for the
+        ("sweep", arrays, qpos) requests, one crossing launch for the ("crossings", plans, None) ones;
+        a failed launch is each of its requests' reply. ``shapes`` [sweep, crossings] grow in place."""
+        from jax3dc.physics.mjx_batch import batch_pair_distances
+        from jax3dc.physics.crossing_batch import batch_first_crossings
+
+        results: list = [None] * len(batch)
+        sweeps = [i for i, (_, r, _) in enumerate(batch) if r[0] == "sweep"]
+        crossing = [i for i, (_, r, _) in enumerate(batch) if r[0] == "crossings"]
+        if sweeps:
+            try:
+                distances, shapes[0] = batch_pair_distances([batch[i][1][1] for i in sweeps], [batch[i][2] for i in sweeps],
+                                                            shapes[0], self.stats.phases)
+            except Exception as error:  # noqa: BLE001  (sent back: the worker raises it for its object)
+                distances = [error] * len(sweeps)
+            self.stats.launches += 1
+            self.stats.objects += len(sweeps)
+            self.stats.items += sum(len(batch[i][2]) for i in sweeps)
+            for i, d in zip(sweeps, distances):
+                results[i] = d
+        if crossing:
+            plans = [p for i in crossing for p in batch[i][1][1]]
+            try:
+                first, shapes[1] = batch_first_crossings(plans, shapes[1], self.stats.phases)
+            except Exception as error:  # noqa: BLE001  (as above)
+                first = [error] * len(plans)
+            at = 0
+            for i in crossing:
+                n = len(batch[i][1][1])
+                answers = first[at:at + n]
+                at += n
+                errors = [a for a in answers if isinstance(a, Exception)]
+                results[i] = errors[0] if errors else answers
+        return results
 
 
 _CLIENT: "DeviceClient | None" = None
@@ -115,6 +149,7 @@ class DeviceClient:
     worker: int
     requests: object
     reply: object
+    crossings: bool = False  # the service answers crossing queries (``crossings_many``)
 
     def __call__(self, model: mujoco.MjModel, qpos: np.ndarray) -> np.ndarray:
         return self.many([model], [qpos])[0]
@@ -125,15 +160,39 @@ class DeviceClient:
         from jax3dc.physics.mjx_batch import object_arrays  # lazy: as in DeviceService.serve (0.50 s)
 
         for model, q in zip(models, qpos):
-            self.requests.put((self.worker, object_arrays(model), np.asarray(q)))
-        results = [self.reply.get() for _ in models]
+            self.requests.put((self.worker, ("sweep", object_arrays(model)), np.asarray(q)))
+        return self._replies(len(models))
+
+    def many_with_crossings(self, models: list[mujoco.MjModel], qpos: list[np.ndarray],
+                            plans: list) -> tuple[list[np.ndarray], list[list[int | None]]]:
+        """``many``'s distances and the first crossing states of ``plans``' queries
+        (``crossing.CrossingPlan``; ``crossing_batch``), all sent before the first reply is awaited."""
+        from jax3dc.physics.mjx_batch import object_arrays  # lazy: as in many
+
+        for model, q in zip(models, qpos):
+            self.requests.put((self.worker, ("sweep", object_arrays(model)), np.asarray(q)))
+        # what the launch reads of a plan: one message, so that its shared boards are pickled once
+        self.requests.put((self.worker, ("crossings", [_Queries(p.tracks, p.queries) for p in plans]), None))
+        results = self._replies(len(models) + 1)
+        return results[:-1], results[-1]
+
+    def _replies(self, n: int) -> list:
+        results = [self.reply.get() for _ in range(n)]
         for result in results:
             if isinstance(result, Exception):
                 raise result
         return results
 
 
-def init_worker(requests, replies, next_worker) -> None:
+@dataclass(frozen=True)
+class _Queries:
+    """A crossing plan's tracks and queries: what ``crossing_batch`` reads of it."""
+
+    tracks: tuple
+    queries: tuple
+
+
+def init_worker(requests, replies, next_worker, crossings: bool = False) -> None:
     """Pool initializer: this process's client, and JAX kept off the accelerator (the workers build
     arrays; only the main process launches)."""
     global _CLIENT
@@ -143,7 +202,7 @@ def init_worker(requests, replies, next_worker) -> None:
     with next_worker.get_lock():
         worker = next_worker.value
         next_worker.value += 1
-    _CLIENT = DeviceClient(worker, requests, replies[worker])
+    _CLIENT = DeviceClient(worker, requests, replies[worker], crossings)
 
 
 def serve_workers(stack: contextlib.ExitStack, context, workers: int, **service) -> tuple[DeviceService, dict]:

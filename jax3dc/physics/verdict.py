@@ -28,7 +28,7 @@ import numpy as np
 import trimesh
 
 from jax3dc.physics import cpu_backend
-from jax3dc.physics.crossing import crossings
+from jax3dc.physics.crossing import CrossingPlan, crossing_plan, first_crossings
 from jax3dc.physics.dynamics import Rollout, gravity, reachability, tolerated_pairs
 from jax3dc.physics.findings import WARNING, Finding, Verdict
 from jax3dc.physics.floor import first_below_floor
@@ -122,10 +122,12 @@ def penetration_model(structure: Structure, parts: dict[int, trimesh.Trimesh], i
 
 
 def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], inputs: KinematicInputs, distances: np.ndarray,
-                 rollout: Rollout, mounted: bool, names: Sequence[str]) -> tuple[Verdict, dict[int, Any]]:
+                 rollout: Rollout, mounted: bool, names: Sequence[str],
+                 crossed: dict[int, tuple[int, float]] | None = None) -> tuple[Verdict, dict[int, Any]]:
     """The verdict of the checks ``names`` and the penetration curves, given the contact distances
-    over ``inputs.states`` (C's proximity itself, or a penetration query's)."""
-    run = CheckRun(structure, parts, inputs.sim, inputs.states, distances, inputs.proximity, rollout, mounted)
+    over ``inputs.states`` (C's proximity itself, or a penetration query's) and, where a batched
+    launch found them, the board crossings of ``crossing_plan_of`` (else they are found here)."""
+    run = CheckRun(structure, parts, inputs.sim, inputs.states, distances, inputs.proximity, rollout, mounted, crossed)
     return run_checks(run, names), penetration_curves(inputs.sim, inputs.states, distances)
 
 
@@ -159,6 +161,15 @@ class CheckRun:
     proximity: np.ndarray
     rollout: Rollout
     mounted: bool
+    given_crossings: dict[int, tuple[int, float]] | None = None
+
+    @functools.cached_property
+    def crossed(self) -> dict[int, tuple[int, float]]:
+        """Thin boards driven through each other (``crossing``): too shallow for the depth test."""
+        if self.given_crossings is not None:
+            return self.given_crossings
+        plan = crossing_plan_of(self.structure, self.parts, self.sim, self.states)
+        return plan.resolve(first_crossings(plan))
 
     @functools.cached_property
     def body_part(self) -> dict[int, int]:
@@ -199,18 +210,24 @@ def rest_check(run: CheckRun) -> list[Finding]:
 
 def joint_checks(run: CheckRun) -> list[Finding]:
     """Per joint, over its sweep: what it drives into (or through) and whether its part stays on its parent."""
-    sim, states = run.sim, run.states
-    sweeps = {}
-    for k, part in enumerate(sim.joint_parts):
-        rows = _nearest_rest_first(np.nonzero(states.joint == k)[0], states.value, sim.model.qpos0[sim.joint_qpos[k]])
-        sweeps[part] = states.value[rows] / (1.0 if sim.joint_type[k] == "hinge" else sim.scale)
-    crossed = crossings(run.structure, run.parts, sweeps, _pieces_nu(run.structure, sim))  # thin boards driven through each other: too shallow for the depth test
+    sim, states, crossed = run.sim, run.states, run.crossed
     found: list[Finding] = []
     for k, part in enumerate(sim.joint_parts):
         rows = _nearest_rest_first(np.nonzero(states.joint == k)[0], states.value, sim.model.qpos0[sim.joint_qpos[k]])
         _motion_findings(run, k, part, rows, crossed, found)
         _attachment_findings(run, k, part, rows, found)
     return found
+
+
+def crossing_plan_of(structure: Structure, parts: dict[int, trimesh.Trimesh], sim: SimModel,
+                     states: StateBatch) -> CrossingPlan:
+    """The board-crossing check of every joint's sweep (nearest rest first), as data
+    (``crossing.crossing_plan``): a batched launch answers many verdicts' at once."""
+    sweeps = {}
+    for k, part in enumerate(sim.joint_parts):
+        rows = _nearest_rest_first(np.nonzero(states.joint == k)[0], states.value, sim.model.qpos0[sim.joint_qpos[k]])
+        sweeps[part] = states.value[rows] / (1.0 if sim.joint_type[k] == "hinge" else sim.scale)
+    return crossing_plan(structure, parts, sweeps, _pieces_nu(structure, sim))
 
 
 def _has(found: list[Finding], part: int, checks: set[str]) -> bool:

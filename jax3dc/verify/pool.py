@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-from jax3dc.physics.candidate_verdicts import start_shapes
+from jax3dc.physics.candidate_verdicts import device_crossings, start_shapes
 from jax3dc.physics.mjx_service import serve_workers
 from jax3dc.verify.select import Candidate
 from jax3dc.verify.verified import ObjectParts, Verified, verify_object
@@ -56,7 +56,8 @@ def verify_many(jobs: Sequence[Job], load: Load, workers: int, backend: str = "c
     with contextlib.ExitStack() as stack:
         if workers > 1 and len(jobs) > 1:  # spawned: a forked child would inherit the parent's threads and locks
             context = mp.get_context("spawn")
-            service = serve_workers(stack, context, workers, start_shapes=start_shapes())[1] if backend == "mjx" else {}
+            service = (serve_workers(stack, context, workers, start_shapes=start_shapes(), crossings=device_crossings())[1]
+                       if backend == "mjx" else {})
             pool = stack.enter_context(ProcessPoolExecutor(workers, mp_context=context, **service))
             return list(pool.map(run, jobs))
         return [run(job) for job in jobs]
