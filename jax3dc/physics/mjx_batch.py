@@ -19,6 +19,7 @@ is a ValueError naming the body.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import time
@@ -33,6 +34,7 @@ import numpy as np
 from jax3dc.physics.mjx_backend import (BOX_SLACK_M, CHUNK_ITEMS, MIN_CAPACITY, SMALL_HULL_VERTICES, _boxes_overlap,
                                         _candidate_pairs, _cross, _dot, _hull, penetration_depth)
 
+NARROW_STEP = 4096  # narrow-phase entries computed at once (a launch runs as many steps as its entries fill)
 HINGE, SLIDE = 1, 2  # body joint kinds in the arrays (0: welded to its parent)
 TIER_CLASSES = ((0, 0), (0, 1), (1, 1))  # pair classes by the size tiers of their two hulls (the smaller first)
 HULL_FIELDS = ("vert", "inner", "face_normal", "edge", "edge_face_normal")
@@ -185,9 +187,11 @@ def _class_depths(pairs, geom_hull, pair_tier, hull1: dict, hull2: dict, item_ob
                   pair_class: int, capacity: int):
     """The narrow phase of one pair class: the first ``capacity`` kept (item, pair) entries of the
     class, as flat indices into [I, P], and their contact distance (-depth where they
-    interpenetrate, else +inf). Compiled per class and capacity: the other shapes are the sweep's."""
+    interpenetrate, else +inf). Compiled per class and capacity: the other shapes are the sweep's.
+    Only the ``NARROW_STEP`` chunks that hold the ``count`` kept entries are computed, so a
+    capacity larger than a launch needs (``Shapes.capacity``) costs it no time."""
     n_pairs = keep.shape[1]
-    chunk = min(CHUNK_ITEMS, capacity)
+    chunk = min(NARROW_STEP, capacity)
     mine = keep & (pair_tier[item_object] == pair_class)
     flat = jnp.nonzero(mine.reshape(-1), size=capacity, fill_value=0)[0]
     item, pair = flat // n_pairs, flat % n_pairs
@@ -204,7 +208,12 @@ def _class_depths(pairs, geom_hull, pair_tier, hull1: dict, hull2: dict, item_ob
         return jax.vmap(one)(*args)
 
     shaped = [x.reshape(capacity // chunk, chunk) for x in (item, g1, g2, slot1, slot2)]
-    depth = jax.lax.map(collide, shaped).reshape(capacity)
+
+    def step(i, out):
+        return out.at[i].set(collide([x[i] for x in shaped]))
+
+    depth = jax.lax.fori_loop(0, (count + chunk - 1) // chunk, step, jnp.full((capacity // chunk, chunk), -1.0, pos.dtype))
+    depth = depth.reshape(capacity)
     valid = jnp.arange(capacity) < count
     return flat, jnp.where(valid & (depth >= 0.0), -depth, jnp.inf)
 
@@ -222,6 +231,7 @@ class Shapes:
     items: int = 64
     hulls: tuple[int, int] = (1, 1)  # per tier: how many hulls
     hull_sizes: tuple[tuple[int, int, int], ...] = ((SMALL_HULL_VERTICES, 8, 8), (8, 8, 8))  # per tier: vertices, faces, edges
+    capacity: int = 0  # the least narrow-phase capacity of a launch (0: each launch its own, ``narrow_capacity``)
 
     def grown(self, other: "Shapes") -> "Shapes":
         """The elementwise largest of two."""
@@ -351,8 +361,12 @@ def batch_pair_distances(objects: list[ObjectArrays], qpos: list[np.ndarray], at
     found_flat, found_dist = [], []
     for k, ((t1, t2), count) in enumerate(zip(TIER_CLASSES, counts)):
         if count:  # capacities stay per launch (narrow_capacity): a sweep's largest would cost every launch its time
+            capacity = narrow_capacity(int(count))
+            if shapes.capacity:  # a floor that grows as the other shapes do: compiles only as it grows
+                capacity = max(capacity, shapes.capacity)
+                shapes = dataclasses.replace(shapes, capacity=capacity)
             flat, dist = _class_depths(arrays["pairs"], arrays["geom_hull"], arrays["pair_tier"], hulls[t1], hulls[t2],
-                                       item_object, pos, rot, keep, count, pair_class=k, capacity=narrow_capacity(int(count)))
+                                       item_object, pos, rot, keep, count, pair_class=k, capacity=capacity)
             flat, dist = np.asarray(flat)[:count], np.asarray(dist, np.float64)[:count]
             found_flat.append(flat[np.isfinite(dist)])
             found_dist.append(dist[np.isfinite(dist)])

@@ -51,7 +51,8 @@ def test_forward_kinematics_equal_c_mujoco():
 
 GROUP = 7  # objects per launch
 EXACT_EVERY = 4  # objects also checked alone at their exact sizes (a compile each)
-SWEEP_LIKE = Shapes(objects=8, bodies=48, geoms=192, pairs=1536, nq=48, items=1024)  # beyond what a group needs, as a sweep pads
+# beyond what a group needs, as a sweep pads; the narrow-phase capacity as an accelerator's launches floor it
+SWEEP_LIKE = Shapes(objects=8, bodies=48, geoms=192, pairs=1536, nq=48, items=1024, capacity=65536)
 
 
 def _objects():
@@ -83,6 +84,7 @@ def test_padding_and_batching_change_no_verdict():
         group = slice(start, start + GROUP)
         distances, shapes = batch_pair_distances(arrays[group], [s.qpos for s in states[group]], SWEEP_LIKE)
         assert shapes.objects == SWEEP_LIKE.objects and shapes.items >= sum(len(s.qpos) for s in states[group])
+        assert shapes.capacity >= SWEEP_LIKE.capacity
         batched += distances
     penetrating = 0
     for n in range(0, len(objects), EXACT_EVERY):
