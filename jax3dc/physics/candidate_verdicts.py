@@ -5,16 +5,19 @@ The structures share the part meshes, so their collision pieces come from one de
 part and frame (``convex_pieces``' caches: a candidate that moves no part's frame decomposes
 nothing). Each structure's kinematic model, check states and C proximity are built on the CPU as
 ``verdict.verdict_with_curves`` builds them; the penetration depths of every structure's states
-then come from one ``mjx_batch`` launch, padded to at least ``START_SHAPES`` and to the largest
+then come from one ``mjx_batch`` launch over the same models read without their detachment margin
+(no second model is built), padded to at least ``START_SHAPES`` and to the largest
 shapes this process has met, so a run over many objects compiles only when a larger object comes.
 In a worker process of a device service (``mjx_service``, as ``physics sweep --backend mjx`` runs
 it) the structures go to the service instead, which launches the requests of all its workers together.
 On an accelerator the board-crossing queries of every structure (``verdict.crossing_plan_of``, the
 largest CPU share of a C verdict) go with them, to one ``crossing_batch`` launch; on a CPU numpy
-answers them faster, in the checks.
+answers them faster, in the checks. The checks that read no distances (``DISTANCE_FREE_CHECKS``:
+relations, gravity) run in the worker while the service's device measures them.
 The rollouts of the dynamic checks run in C, as ``physics sweep --backend mjx`` runs them: each
 structure's reachability model has its own contact pairs, which MJX keeps static, so they cannot
-share a compiled launch, and they are a small share of a verdict (``verify.verdicts``).
+share a compiled launch; with the models they build they are about a third of a C verdict, and the
+CPU side they leave is what bounds this path's speed against C (``docs/BENCHMARKS.md``, note j).
 
 With the same models, states, proximity and rollouts, the verdicts differ from the C path's only
 where the two depths of a pair fall on two sides of a tolerance. MJX's is the exact separating-axis
@@ -28,6 +31,7 @@ candidate that fails anyway; the winners and repairs were the same.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import threading
 import time
@@ -40,7 +44,8 @@ import trimesh
 from jax3dc.physics import cpu_backend
 from jax3dc.physics.findings import Verdict
 from jax3dc.physics.mjx_service import installed_client
-from jax3dc.physics.verdict import check_names, crossing_plan_of, kinematic_inputs, penetration_model, verdict_from
+from jax3dc.physics.verdict import (CHECKS, DISTANCE_FREE_CHECKS, CheckRun, KinematicInputs, check_names, crossing_plan_of,
+                                    kinematic_inputs, run_checks)
 from jax3dc.structure.schema import Structure
 
 # On an accelerator the first launch of a process is padded to these (the largest a device
@@ -81,7 +86,7 @@ def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh
                        timings: dict[str, float] | None = None, crossings: bool | None = None) -> list[Verdict]:
     """One verdict per structure (in order) over ``parts`` (nu, ``scale`` metres per nu), the
     interpenetration of all of them measured in one MJX launch. ``threads``: C rollout threads;
-    ``timings`` gathers seconds per step: the CPU's "kinematic inputs", "penetration models",
+    ``timings`` gathers seconds per step: the CPU's "kinematic inputs", "penetration arrays",
     "crossing plans" and "checks" (rollouts included), and the launches' phases
     (``mjx_batch.batch_pair_distances``, "crossings"); ``crossings``: answer the crossing queries in
     the launch (default: in a service's worker as the service says, else on an accelerator)."""
@@ -91,8 +96,8 @@ def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh
     clock = _Clock(timings)
     inputs = [kinematic_inputs(s, parts, scale) for s in structures]
     clock.lap("kinematic inputs")
-    models = [penetration_model(s, parts, i) for s, i in zip(structures, inputs)]
-    clock.lap("penetration models")
+    arrays = _penetration_arrays(inputs)
+    clock.lap("penetration arrays")
     service = installed_client()
     if crossings is None:
         crossings = service.crossings if service is not None else device_crossings()
@@ -100,14 +105,30 @@ def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh
     if crossings and "joints" in names:
         plans = [crossing_plan_of(s, parts, i.sim, i.states) for s, i in zip(structures, inputs)]
         clock.lap("crossing plans")
-    distances, first = _launch(models, [i.states.qpos for i in inputs], plans, timings)
+    replies = _submit(arrays, [i.states.qpos for i in inputs], plans, timings)
+    clock.lap()
+    rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
+    runs = [CheckRun(s, parts, i.sim, i.states, None, i.proximity, rollout, mounted) for s, i in zip(structures, inputs)]
+    # the checks that need no distances run while a service's device measures them
+    early = [{n: CHECKS[n](run) for n in names if n in DISTANCE_FREE_CHECKS} for run in runs]
+    clock.lap("checks")
+    distances, first = replies()
     clock.lap()
     crossed = [None] * len(structures) if plans is None else [p.resolve(f) for p, f in zip(plans, first)]
-    rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
-    verdicts = [verdict_from(s, parts, i, d, rollout, mounted, names, c)[0]
-                for s, i, d, c in zip(structures, inputs, distances, crossed)]
+    verdicts = [run_checks(dataclasses.replace(run, distances=d, given_crossings=c), names, done)
+                for run, d, c, done in zip(runs, distances, crossed, early)]
     clock.lap("checks")
     return verdicts
+
+
+def _penetration_arrays(inputs: list[KinematicInputs]) -> list:
+    """What the launch reads of each structure: its kinematic model as the same model without the
+    detachment margin (``mjx_batch.object_arrays``; no second model is built)."""
+    from jax3dc.physics.mjx_batch import object_arrays  # lazy: MJX and jax (0.46 s), for this path only
+
+    with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use
+        warnings.simplefilter("ignore", UserWarning)
+        return [object_arrays(i.sim.model, ignore_margin=True) for i in inputs]
 
 
 class _Clock:
@@ -123,23 +144,20 @@ class _Clock:
         self.last = now
 
 
-def _launch(models: list, qpos: list[np.ndarray], plans: list | None,
-            timings: dict[str, float] | None) -> tuple[list[np.ndarray], list | None]:
-    """The distances of ``models`` at ``qpos`` and, with ``plans``, their crossing queries' first
-    states: in a worker of a device service (``mjx_service``), the service's launches, shared with
-    the other workers' requests; else launches in this process."""
+def _submit(arrays: list, qpos: list[np.ndarray], plans: list | None, timings: dict[str, float] | None):
+    """A function that returns the distances of ``arrays`` at ``qpos`` and, with ``plans``, their
+    crossing queries' first states: in a worker of a device service (``mjx_service``), the service's
+    launches, shared with the other workers' requests and sent at once; else launches in this
+    process, run before it returns."""
     global _largest, _largest_crossings
 
     service = installed_client()
     if service is not None:
-        return service.many_with_crossings(models, qpos, plans) if plans is not None else (service.many(models, qpos), None)
+        return service.submit(arrays, qpos, plans)
     # lazy: MJX and jax (0.46 s), for a launch in this process only
     from jax3dc.physics.crossing_batch import CrossingShapes, START_SHAPES as CROSSING_START, batch_first_crossings
-    from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances, object_arrays
+    from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances
 
-    with warnings.catch_warnings():  # about MJX's own convex data of large faces, which this path does not use
-        warnings.simplefilter("ignore", UserWarning)
-        arrays = [object_arrays(m) for m in models]
     first = None
     with _lock:
         at_least = _largest or Shapes(**start_shapes())
@@ -147,4 +165,4 @@ def _launch(models: list, qpos: list[np.ndarray], plans: list | None,
         if plans is not None:
             start = CrossingShapes() if jax_on_cpu() else CROSSING_START
             first, _largest_crossings = batch_first_crossings(plans, _largest_crossings or start, timings)
-    return distances, first
+    return lambda: (distances, first)

@@ -154,8 +154,9 @@ def penetration_depth(pos1, mat1, hull1: dict, pos2, mat2, hull2: dict) -> jax.A
     return jnp.minimum(face_overlap, edge_overlap)
 
 
-def _candidate_pairs(model: mujoco.MjModel) -> np.ndarray:
-    """[P, 2] geom pairs MJX's driver would test; only mesh–mesh pairs without margin are supported."""
+def _candidate_pairs(model: mujoco.MjModel, ignore_margin: bool = False) -> np.ndarray:
+    """[P, 2] geom pairs MJX's driver would test; only mesh–mesh pairs without margin are supported
+    (``ignore_margin``: the caller measures penetration of a model whose margin is C's proximity setting)."""
     pairs = []
     for g1, g2, explicit in geom_pairs(model):
         if explicit > -1:
@@ -164,7 +165,7 @@ def _candidate_pairs(model: mujoco.MjModel) -> np.ndarray:
             if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_MESH:
                 name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g)
                 raise ValueError(f"geom {name!r} (id {g}) is not a mesh: the batched MJX check collides convex meshes only")
-            if model.geom_margin[g] > 0:
+            if model.geom_margin[g] > 0 and not ignore_margin:
                 raise ValueError(f"geom id {g} has margin {model.geom_margin[g]}: the batched check measures contacts, not distances within a margin")
         pairs.append((g1, g2))
     return np.asarray(pairs, dtype=np.int32).reshape(-1, 2)

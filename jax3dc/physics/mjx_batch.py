@@ -72,8 +72,12 @@ class ObjectArrays:
     hulls: tuple[list[tuple[np.ndarray, ...]], list[tuple[np.ndarray, ...]]]  # per tier: ``_hull`` data
 
 
-def object_arrays(model: mujoco.MjModel) -> ObjectArrays:
-    """The arrays of ``model`` (a ValueError names a body with a joint the check does not move)."""
+def object_arrays(model: mujoco.MjModel, ignore_margin: bool = False) -> ObjectArrays:
+    """The arrays of ``model`` (a ValueError names a body with a joint the check does not move).
+
+    ``ignore_margin``: read a model whose contact margin is C MuJoCo's proximity setting (the
+    verdict's kinematic model) as the same model without it: the margin changes no array here, and
+    the check measures penetration, never distances within a margin."""
     kind = np.zeros(model.nbody, np.int32)
     qadr = np.zeros(model.nbody, np.int32)
     jpos, jaxis, ref = np.zeros((model.nbody, 3)), np.zeros((model.nbody, 3)), np.zeros(model.nbody)
@@ -88,7 +92,7 @@ def object_arrays(model: mujoco.MjModel) -> ObjectArrays:
         kind[b] = HINGE if jtype == int(mujoco.mjtJoint.mjJNT_HINGE) else SLIDE
         qadr[b] = model.jnt_qposadr[j]
         jpos[b], jaxis[b], ref[b] = model.jnt_pos[j], model.jnt_axis[j], model.qpos0[model.jnt_qposadr[j]]
-    pairs = _candidate_pairs(model)
+    pairs = _candidate_pairs(model, ignore_margin)
     hulls = [_hull(model.mesh_vert[model.mesh_vertadr[m]:model.mesh_vertadr[m] + model.mesh_vertnum[m]].astype(np.float64))
              for m in range(model.nmesh)]
     mesh_tier = np.array([int(len(h[0]) > SMALL_HULL_VERTICES) for h in hulls], np.int32)

@@ -20,6 +20,7 @@ import queue
 import sys
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import mujoco
@@ -75,8 +76,8 @@ class DeviceService:
 
     def serve(self, stop: threading.Event) -> None:
         # lazy: MJX and jax (0.46 s); the CPU physics path imports this module (candidate_verdicts) and loads neither
-        from jax3dc.physics.mjx_batch import Shapes
         from jax3dc.physics.crossing_batch import START_SHAPES, CrossingShapes
+        from jax3dc.physics.mjx_batch import Shapes
 
         clock = CompileClock()
         # the largest met so far: every launch is padded to it, so compiles happen only as it grows
@@ -106,8 +107,9 @@ class DeviceService:
         """The replies to ``batch``'s requests, in its order: one penetration launch for the
         ("sweep", arrays, qpos) requests, one crossing launch for the ("crossings", plans, None) ones;
         a failed launch is each of its requests' reply. ``shapes`` [sweep, crossings] grow in place."""
-        from jax3dc.physics.mjx_batch import batch_pair_distances
+        # lazy: as in serve (imported there already; this module stays importable without jax)
         from jax3dc.physics.crossing_batch import batch_first_crossings
+        from jax3dc.physics.mjx_batch import batch_pair_distances
 
         results: list = [None] * len(batch)
         sweeps = [i for i, (_, r, _) in enumerate(batch) if r[0] == "sweep"]
@@ -149,7 +151,7 @@ class DeviceClient:
     worker: int
     requests: object
     reply: object
-    crossings: bool = False  # the service answers crossing queries (``crossings_many``)
+    crossings: bool = False  # the service answers crossing queries (``submit``'s plans)
 
     def __call__(self, model: mujoco.MjModel, qpos: np.ndarray) -> np.ndarray:
         return self.many([model], [qpos])[0]
@@ -159,22 +161,23 @@ class DeviceClient:
         so the service can put them in one launch; replies come back in request order."""
         from jax3dc.physics.mjx_batch import object_arrays  # lazy: as in DeviceService.serve (0.50 s)
 
-        for model, q in zip(models, qpos):
-            self.requests.put((self.worker, ("sweep", object_arrays(model)), np.asarray(q)))
-        return self._replies(len(models))
+        return self.submit([object_arrays(m) for m in models], qpos)()[0]
 
-    def many_with_crossings(self, models: list[mujoco.MjModel], qpos: list[np.ndarray],
-                            plans: list) -> tuple[list[np.ndarray], list[list[int | None]]]:
-        """``many``'s distances and the first crossing states of ``plans``' queries
-        (``crossing.CrossingPlan``; ``crossing_batch``), all sent before the first reply is awaited."""
-        from jax3dc.physics.mjx_batch import object_arrays  # lazy: as in many
+    def submit(self, arrays: list, qpos: list[np.ndarray], plans: list | None = None
+               ) -> Callable[[], tuple[list[np.ndarray], list[list[int | None]] | None]]:
+        """Send the distances of ``arrays`` (``mjx_batch.ObjectArrays``) at ``qpos`` and, with
+        ``plans`` (``crossing.CrossingPlan``), the first crossing states of their queries; the
+        returned function waits for the replies, so the caller can work while the device does."""
+        for a, q in zip(arrays, qpos):
+            self.requests.put((self.worker, ("sweep", a), np.asarray(q)))
+        if plans is not None:  # what the launch reads of a plan, in one message: its shared boards are pickled once
+            self.requests.put((self.worker, ("crossings", [_Queries(p.tracks, p.queries) for p in plans]), None))
 
-        for model, q in zip(models, qpos):
-            self.requests.put((self.worker, ("sweep", object_arrays(model)), np.asarray(q)))
-        # what the launch reads of a plan: one message, so that its shared boards are pickled once
-        self.requests.put((self.worker, ("crossings", [_Queries(p.tracks, p.queries) for p in plans]), None))
-        results = self._replies(len(models) + 1)
-        return results[:-1], results[-1]
+        def wait() -> tuple[list[np.ndarray], list[list[int | None]] | None]:
+            results = self._replies(len(arrays) + (plans is not None))
+            return (results[:-1], results[-1]) if plans is not None else (results, None)
+
+        return wait
 
     def _replies(self, n: int) -> list:
         results = [self.reply.get() for _ in range(n)]

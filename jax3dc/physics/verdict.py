@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any, Callable, Protocol, Sequence
+from typing import Any, Callable, Mapping, Protocol, Sequence
 
 import mujoco
 import numpy as np
@@ -362,9 +362,12 @@ def gravity_check(run: CheckRun) -> list[Finding]:
     return gravity(run.structure, run.parts, run.sim.scale, run.sim.pieces, run.rollout, run.mounted)
 
 
-def run_checks(run: CheckRun, names: Sequence[str]) -> Verdict:
-    """The verdict of the checks ``names`` (keys of CHECKS), their findings in that order."""
-    found = tuple(finding for name in names for finding in CHECKS[name](run))
+def run_checks(run: CheckRun, names: Sequence[str], done: Mapping[str, list[Finding]] | None = None) -> Verdict:
+    """The verdict of the checks ``names`` (keys of CHECKS), their findings in that order;
+    ``done``: findings of some of them already run (DISTANCE_FREE_CHECKS, while the distances were
+    being measured)."""
+    done = done or {}
+    found = tuple(finding for name in names for finding in (done[name] if name in done else CHECKS[name](run)))
     return Verdict(tuple(run.sim.joint_parts), found, "gravity" in names)
 
 
@@ -372,6 +375,7 @@ CHECKS: dict[str, Check] = {"rest": rest_check, "joints": joint_checks, "relatio
                             "combinations": combination_check, "limits": limit_check, "gravity": gravity_check}
 KINEMATIC_CHECKS = ("rest", "joints", "relations", "combinations")  # collision and distance queries only
 DYNAMIC_CHECKS = ("limits", "gravity")  # short rollouts
+DISTANCE_FREE_CHECKS = ("relations", "gravity")  # read neither the distances nor the crossings: run before they are in
 
 
 PENETRATES = {"penetration", "crossing"}  # a joint blamed for one penetration is not blamed for another

@@ -17,7 +17,8 @@ from jax3dc.physics.candidate_verdicts import candidate_verdicts
 from jax3dc.physics.crossing import crossing_plan, first_crossings
 from jax3dc.physics.crossing_batch import CHUNK_POINTS, CrossingShapes, batch_first_crossings
 from jax3dc.physics.mjx_service import DeviceClient, DeviceService
-from jax3dc.physics.verdict import crossing_plan_of, kinematic_inputs, penetration_model
+from jax3dc.physics.mjx_batch import object_arrays
+from jax3dc.physics.verdict import crossing_plan_of, kinematic_inputs
 from jax3dc.verify.select import parse_candidate
 from tests.physics.test_physics_crossing import _box_with_lid
 
@@ -90,9 +91,9 @@ def test_candidate_verdicts_and_the_service_give_the_numpy_verdicts():
     try:
         client = DeviceClient(0, service.requests, service.replies[0], crossings=True)
         inputs = [kinematic_inputs(s, obj.parts, obj.scale) for s in structures]
-        models = [penetration_model(s, obj.parts, i) for s, i in zip(structures, inputs)]
+        arrays = [object_arrays(i.sim.model, ignore_margin=True) for i in inputs]
         plans = [crossing_plan_of(s, obj.parts, i.sim, i.states) for s, i in zip(structures, inputs)]
-        distances, first = client.many_with_crossings(models, [i.states.qpos for i in inputs], plans)
+        distances, first = client.submit(arrays, [i.states.qpos for i in inputs], plans)()
     finally:
         stop.set()
         server.join()

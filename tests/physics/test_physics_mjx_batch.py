@@ -5,11 +5,13 @@ fixture: the same distances, hence the same verdicts."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import jax
 import mujoco
 import numpy as np
+import pytest
 
 from eval.verdict_accuracy.ground_truth import factory_objects, imported_objects
 from jax3dc.physics.mjx_batch import (EXACT, Shapes, _forward, _needed, _padded, batch_pair_distances, narrow_capacity, object_arrays,
@@ -17,7 +19,7 @@ from jax3dc.physics.mjx_batch import (EXACT, Shapes, _forward, _needed, _padded,
 from jax3dc.physics.sim_model import SimOptions, build_sim_model
 from jax3dc.physics.states import check_states
 from jax3dc.physics.tolerances import DETACH_TOL_NU
-from jax3dc.physics.verdict import KINEMATIC_CHECKS, CheckRun, run_checks
+from jax3dc.physics.verdict import KINEMATIC_CHECKS, CheckRun, kinematic_inputs, penetration_model, run_checks
 from tests.physics.test_physics_ground_truth import PARTNET_MOBILITY
 
 
@@ -47,6 +49,25 @@ def test_forward_kinematics_equal_c_mujoco():
             np.testing.assert_allclose(np.asarray(pos[s, :model.ngeom]), data.geom_xpos, atol=2e-5, err_msg=obj.name)
             np.testing.assert_allclose(np.asarray(rot[s, :model.ngeom]).reshape(-1, 9), data.geom_xmat, atol=2e-5,
                                        err_msg=obj.name)
+
+
+def test_the_kinematic_model_without_its_margin_is_the_penetration_model():
+    """Candidate verdicts read the kinematic model (margin: C's proximity) as the penetration
+    model instead of building it: every array is the same; without ``ignore_margin`` the margin is
+    refused, since the check measures no distances within it."""
+    for obj in factory_objects(["dishwasher", "eyeglasses", "oven"], [0]):
+        inputs = kinematic_inputs(obj.structure, obj.parts, obj.scale)
+        want = object_arrays(penetration_model(obj.structure, obj.parts, inputs))
+        got = object_arrays(inputs.sim.model, ignore_margin=True)
+        for field in dataclasses.fields(want):
+            a, b = getattr(want, field.name), getattr(got, field.name)
+            if field.name == "hulls":
+                assert [[len(h) for h in tier] for tier in a] == [[len(h) for h in tier] for tier in b], obj.name
+                assert all(np.array_equal(x, y) for ta, tb in zip(a, b) for ha, hb in zip(ta, tb) for x, y in zip(ha, hb))
+            else:
+                assert np.array_equal(a, b), (obj.name, field.name)
+        with pytest.raises(ValueError, match="has margin"):
+            object_arrays(inputs.sim.model)
 
 
 GROUP = 7  # objects per launch
