@@ -6,10 +6,10 @@ CPU side of the checks, in the same call; the ratio and whether the winners agre
 Objects: factory objects (the categories in turn, seeds 0, 1, ...), and their candidates sampled by
 perturbing the reference's joints: flipped axis, moved pivot, wrong type
 (``eval/verdict_accuracy/candidates.py``); a winner that fails is repaired (pivots moved, the
-default kinds). Objects and candidates are made before timing. The collision pieces of every
-candidate are decomposed into the disk cache first (untimed, printed), so the timed runs measure
-verification; the repairs' alternatives decompose in whichever run meets them first, and MJX runs
-first, so that cost falls on it. ``--phases`` adds where a candidate set's time goes, measured in
+default kinds). Objects and candidates are made before timing. The collision pieces and crossing
+boards of every candidate are found into the disk cache first (untimed, printed), as a repeated run
+finds them, so the timed runs measure verification; the repairs' alternatives decompose in
+whichever run meets them first, and MJX runs first, so that cost falls on it. ``--phases`` adds where a candidate set's time goes, measured in
 this process over a few objects (MJX: CPU steps and launch phases).
 
 python3 bench/candidates_mjx.py --records 200 --workers 16          (a GPU host: MJX on one GPU, C on 16 cores)
@@ -40,6 +40,7 @@ from jax3dc.factories import FACTORIES  # noqa: E402
 from jax3dc.geometry.parts import part_boxes  # noqa: E402
 from jax3dc.physics.candidate_verdicts import candidate_verdicts, device_crossings, start_shapes  # noqa: E402
 from jax3dc.physics.mjx_service import serve_workers  # noqa: E402
+from jax3dc.physics.verdict import crossing_plan_of, kinematic_inputs  # noqa: E402
 from jax3dc.structure import to_json  # noqa: E402
 from jax3dc.verify.select import parse_candidate  # noqa: E402
 from jax3dc.verify.verified import ObjectParts, verify_object  # noqa: E402
@@ -77,12 +78,16 @@ def _jobs(records: int, k: int, repair: bool) -> list[_Job]:
 
 
 def _warm_pieces(job: _Job) -> int:
-    """Decompose every candidate's collision pieces into the disk cache; how many candidates."""
+    """Decompose every candidate's collision pieces, and find its crossing boards, into the disk
+    cache; how many candidates."""
     warnings.filterwarnings("ignore")
     boxes = part_boxes(job.obj.parts)
     for candidate in job.candidates:
         with contextlib.suppress(Exception):  # an unparsable candidate has no pieces
-            collision_pieces(parse_candidate(candidate.text, boxes.keys(), boxes), job.obj.parts, job.obj.scale)
+            structure = parse_candidate(candidate.text, boxes.keys(), boxes)
+            collision_pieces(structure, job.obj.parts, job.obj.scale)
+            inputs = kinematic_inputs(structure, job.obj.parts, job.obj.scale)
+            crossing_plan_of(structure, job.obj.parts, inputs.sim, inputs.states)
     return len(job.candidates)
 
 
@@ -144,7 +149,7 @@ def main() -> None:
     with ProcessPoolExecutor(args.workers, mp_context=context) as pool:
         candidates = sum(pool.map(_warm_pieces, jobs))
     warm = time.perf_counter() - t0
-    print(f"{len(jobs)} objects, {candidates} candidates: made in {made:.1f} s, pieces decomposed in {warm:.1f} s "
+    print(f"{len(jobs)} objects, {candidates} candidates: made in {made:.1f} s, pieces and boards found in {warm:.1f} s "
           f"(untimed below); device: {jax.devices()[0].device_kind} ({jax.default_backend()})", flush=True)
     report: dict = {"records": len(jobs), "candidates": candidates, "k": args.k, "workers": args.workers,
                     "repair": not args.no_repair, "device": jax.devices()[0].device_kind}

@@ -17,8 +17,11 @@ costs one cold run, an acceptable price); this module's source covers the file f
 scipy (qhull's hulls, the voxel fill, connected components) and trimesh (voxelisation, volumes,
 surface samples) compute the pieces. manifold3d, trimesh's boolean engine, is never on this path.
 
-A write goes to a temporary file in the entry's folder and is renamed into place, so a reader (a
-concurrent worker) sees a whole entry or none. An entry that cannot be read or does not hold
+The crossing check's boards and surface points (``jax3dc.physics.crossing``) live in the same
+folder as entries of their own code version (``load_arrays``, ``save_arrays``): they too are found
+from a part's mesh alone, and were a fifth of a first verdict. A write goes to a temporary file in
+the entry's folder and is renamed into place, so a reader (a concurrent worker) sees a whole entry
+or none. An entry that cannot be read or does not hold
 pieces is a miss, and the decomposition's answer replaces it; a folder that cannot be written
 warns once and the run goes on without the disk.
 """
@@ -61,23 +64,20 @@ def code_version() -> bytes:
     return digest.digest()
 
 
-def entry_path(directory: Path, key: bytes) -> Path:
-    """Where the pieces of in-process ``key`` live under ``directory`` for this code version."""
-    name = hashlib.blake2b(code_version() + key, digest_size=20).hexdigest()
+def entry_path(directory: Path, key: bytes, version: bytes | None = None) -> Path:
+    """Where the entry of in-process ``key`` lives under ``directory`` for a code version (default:
+    the pieces', ``code_version``)."""
+    name = hashlib.blake2b((code_version() if version is None else version) + key, digest_size=20).hexdigest()
     return directory / name[:2] / f"{name}.npz"
 
 
 def load(key: bytes) -> list[np.ndarray] | None:
     """The stored pieces of ``key``, or None: disk off, no entry, or one that is unreadable or
     not pieces (torn by a crash, corrupted, another format)."""
-    directory = cache_dir()
-    if directory is None:
+    entry = load_arrays(key, code_version(), ("vertices", "counts"))
+    if entry is None:
         return None
-    try:
-        with np.load(entry_path(directory, key), allow_pickle=False) as entry:
-            vertices, counts = entry["vertices"], entry["counts"]
-    except Exception:  # noqa: BLE001 - absent, or unreadable in any way (zip, CRC, header, name): a miss
-        return None
+    vertices, counts = entry["vertices"], entry["counts"]
     if (vertices.dtype != np.float64 or vertices.ndim != 2 or vertices.shape[1] != 3 or counts.dtype != np.int64
             or counts.ndim != 1 or np.any(counts <= 0) or counts.sum() != len(vertices)):
         return None
@@ -87,18 +87,35 @@ def load(key: bytes) -> list[np.ndarray] | None:
 def save(key: bytes, pieces: Sequence[np.ndarray]) -> None:
     """Store ``pieces`` for ``key`` atomically (temporary file, then rename); a folder that cannot
     be written warns once per process and is skipped."""
+    vertices = np.concatenate(pieces) if pieces else np.zeros((0, 3))
+    save_arrays(key, code_version(), {"vertices": vertices, "counts": np.asarray([len(p) for p in pieces], dtype=np.int64)})
+
+
+def load_arrays(key: bytes, version: bytes, names: Sequence[str]) -> dict[str, np.ndarray] | None:
+    """The arrays ``names`` of the entry of ``key`` under ``version`` (another geometry cache's own
+    code version: the crossing check's boards), or None: disk off, no entry, or an unreadable one."""
+    directory = cache_dir()
+    if directory is None:
+        return None
+    try:
+        with np.load(entry_path(directory, key, version), allow_pickle=False) as entry:
+            return {name: entry[name] for name in names}
+    except Exception:  # noqa: BLE001 - absent, or unreadable in any way (zip, CRC, header, name): a miss
+        return None
+
+
+def save_arrays(key: bytes, version: bytes, arrays: dict[str, np.ndarray]) -> None:
+    """Store ``arrays`` as the entry of ``key`` under ``version`` (atomically, as ``save``)."""
     directory = cache_dir()
     if directory is None:
         return
-    path = entry_path(directory, key)
-    vertices = np.concatenate(pieces) if pieces else np.zeros((0, 3))
-    counts = np.asarray([len(p) for p in pieces], dtype=np.int64)
+    path = entry_path(directory, key, version)
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp", delete=False) as f:
             tmp = Path(f.name)
-            np.savez(f, vertices=vertices, counts=counts)
+            np.savez(f, **arrays)
         os.replace(tmp, path)
     except OSError as e:
         if tmp is not None:
@@ -106,4 +123,4 @@ def save(key: bytes, pieces: Sequence[np.ndarray]) -> None:
         if directory not in _unwritable:
             _unwritable.add(directory)
             warnings.warn(f"convex pieces are not cached on disk: cannot write {directory} ({e}); "
-                          f"set {ENV} to another folder, or to '' to turn the disk cache off", stacklevel=2)
+                          f"set {ENV} to another folder, or to '' to turn the disk cache off", stacklevel=3)

@@ -19,22 +19,27 @@ A part's boards and surface points depend on its rest-frame mesh (and pieces) al
 them (an oriented box per component and piece) was 70 % of a verdict: the K candidates of one
 object, and a repair's alternatives, share their parts, so they are kept per content digest in the
 process (the last ``CACHE_ENTRIES`` parts: three entries each, its mesh's boards, its pieces' boards and
-its surface points), read-only, the same arrays a fresh computation gives.
+its surface points), read-only, the same arrays a fresh computation gives; and on disk beside the
+collision pieces (``geometry.piece_disk_cache``, keyed also by this file's source), so a repeated
+command on the same objects finds none of them again.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import threading
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import trimesh
 from scipy.ndimage import binary_erosion
 from scipy.spatial.transform import Rotation
 
+from jax3dc.geometry import piece_disk_cache
 from jax3dc.physics.tolerances import CROSSING_MARGIN_NU
 from jax3dc.structure.schema import Joint, Structure
 
@@ -254,7 +259,8 @@ _cache_lock = threading.Lock()
 
 def _memo(kind: str, arrays: Sequence[np.ndarray], compute: Callable[[], object]) -> object:
     """``compute()``, once per ``kind``, content of ``arrays`` and the module's constants (read at
-    call time, so a changed constant never returns older boards) in this process."""
+    call time, so a changed constant never returns older boards) in this process, and, with the
+    disk cache on (``geometry.piece_disk_cache``), once on this machine."""
     digest = hashlib.blake2b(kind.encode(), digest_size=32)
     digest.update(np.asarray([MAX_BOARDS_PER_PART, SURFACE_SAMPLES, MIN_BOARD_NU, CROSSING_CELL_NU, FLUSH_NU,
                               JOIN_GAP_NU, BOARD_MAX_THICKNESS_NU, CROSSING_MARGIN_NU], dtype=np.float64).tobytes())
@@ -267,12 +273,60 @@ def _memo(kind: str, arrays: Sequence[np.ndarray], compute: Callable[[], object]
         if key in _cache:
             _cache.move_to_end(key)
             return _cache[key]
-    value = compute()
+    encode, decode, names = _CODECS[kind]
+    stored = piece_disk_cache.load_arrays(key, _disk_version(), names)
+    value = None if stored is None else decode(stored)
+    if value is None:
+        value = compute()
+        piece_disk_cache.save_arrays(key, _disk_version(), encode(value))
     with _cache_lock:
         _cache[key] = value
         while len(_cache) > 3 * CACHE_ENTRIES:
             _cache.popitem(last=False)
     return value
+
+
+@functools.cache
+def _disk_version() -> bytes:
+    """What computes the boards and surface points (this file) and stores them (the pieces' code
+    version: the disk format and the libraries' versions)."""
+    return hashlib.blake2b(Path(__file__).read_bytes() + piece_disk_cache.code_version(), digest_size=32).digest()
+
+
+def _encode_boards(boards: tuple[Board, ...]) -> dict[str, np.ndarray]:
+    return {"centre": np.asarray([b.centre for b in boards]).reshape(-1, 3),
+            "axes": np.asarray([b.axes for b in boards]).reshape(-1, 3, 3),
+            "half": np.asarray([b.half for b in boards]).reshape(-1, 3),
+            "inset": np.asarray([b.inset for b in boards], dtype=np.float64).reshape(-1, 2, 2),
+            "cells": np.asarray([b.covered.shape for b in boards], dtype=np.int64).reshape(-1, 2),
+            "covered": np.concatenate([b.covered.reshape(-1) for b in boards]) if boards else np.zeros(0, bool)}
+
+
+def _decode_boards(e: dict[str, np.ndarray]) -> tuple[Board, ...] | None:
+    """The stored boards, or None where the entry does not hold boards (a miss)."""
+    n = len(e["centre"])
+    shapes = {"centre": (n, 3), "axes": (n, 3, 3), "half": (n, 3), "inset": (n, 2, 2), "cells": (n, 2)}
+    if any(e[k].shape != shape or e[k].dtype.kind != ("i" if k == "cells" else "f") for k, shape in shapes.items()):
+        return None
+    sizes = np.prod(e["cells"], axis=1)
+    if e["covered"].dtype != bool or e["covered"].ndim != 1 or np.any(e["cells"] < 1) or sizes.sum() != len(e["covered"]):
+        return None
+    covered = np.split(e["covered"], np.cumsum(sizes)[:-1]) if n else []
+    return _shared_boards([Board(e["centre"][i], e["axes"][i], e["half"][i], covered[i].reshape(e["cells"][i]), e["inset"][i])
+                           for i in range(n)])
+
+
+def _decode_surface(e: dict[str, np.ndarray]) -> np.ndarray | None:
+    points = e["points"]
+    if points.dtype != np.float64 or points.ndim != 2 or points.shape[1] != 3:
+        return None
+    _read_only(points)
+    return points
+
+
+_CODECS = {"boards": (_encode_boards, _decode_boards, ("centre", "axes", "half", "inset", "cells", "covered")),
+           "piece boards": (_encode_boards, _decode_boards, ("centre", "axes", "half", "inset", "cells", "covered")),
+           "surface": (lambda points: {"points": points}, _decode_surface, ("points",))}
 
 
 def _read_only(*arrays: np.ndarray) -> None:

@@ -70,3 +70,41 @@ def test_boards_shared_between_calls_are_read_only_and_give_the_same_answer():
     moved = parts[1].copy()
     moved.apply_translation([0.0, 0.0, 1e-6])
     assert _mesh_boards(moved)[0].centre[2] != boards[0].centre[2]
+
+
+def _board_arrays(boards) -> list:
+    return [(b.centre, b.axes, b.half, b.covered, b.inset) for b in boards]
+
+
+def test_boards_come_from_the_disk_in_a_new_process_and_a_torn_entry_is_a_miss(tmp_path, monkeypatch):
+    """With the disk cache on, a process that has not seen the part reads its boards and surface
+    points back exactly, finding none; an entry that is not boards is found again and rewritten."""
+    import jax3dc.physics.crossing as crossing
+
+    monkeypatch.setenv("JAX3DC_PIECE_CACHE", str(tmp_path / "cache"))
+    structure, parts = _box_with_lid()
+    crossing._cache.clear()
+    wrong = {2: -np.linspace(0.0, 1.5, 9)}
+    first = crossings(structure, parts, wrong)
+    boards, surface = _board_arrays(_mesh_boards(parts[1])), crossing._cached_surface(parts[1]).copy()
+    entries = sorted((tmp_path / "cache").rglob("*.npz"))
+    assert len(entries) == 5  # two meshes' boards and surfaces, and the boards of no pieces (one entry for both)
+
+    def refuse(*_):
+        raise AssertionError("found again")
+
+    crossing._cache.clear()  # as a new process starts
+    with monkeypatch.context() as m:
+        m.setattr(crossing, "_boards", refuse)
+        m.setattr(crossing, "_surface", refuse)
+        assert crossings(structure, parts, wrong) == first
+        again = _mesh_boards(parts[1])
+        assert all(np.array_equal(x, y) and x.dtype == y.dtype for a, b in zip(boards, _board_arrays(again)) for x, y in zip(a, b))
+        assert np.array_equal(crossing._cached_surface(parts[1]), surface)
+        assert not again[0].covered.flags.writeable
+    for entry in entries:
+        entry.write_bytes(b"not an entry")
+    crossing._cache.clear()
+    assert crossings(structure, parts, wrong) == first
+    assert all(e.read_bytes() != b"not an entry" for e in entries)
+    crossing._cache.clear()
