@@ -31,6 +31,7 @@ from eval.metrics.programs import score_program, summarise
 from eval.metrics.tables import format_tables
 from eval.records import read_records, reference_of
 from jax3dc.cli_args import positive_int, positive_float
+from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR, use_compile_cache
 from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.grounding import Grounding
 from jax3dc.release import default_structure_model
@@ -58,6 +59,8 @@ def source_folders(folders: list[str]) -> dict[str, Path]:
 
 def run_eval(args: argparse.Namespace) -> int:
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts (generation runs here)
+    if args.physics_backend == "mjx":  # before the first compile: JAX reads the setting once
+        use_compile_cache(args.compile_cache)
     # lazy: `jax3dc --help` imports this module; the decoder costs it 37 ms more, the report (overlays,
     # viewers, the part rebuilder) 43 ms
     from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
@@ -244,6 +247,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      help="how --candidates/--repair check: c (C MuJoCo in --workers processes) or mjx (the workers' "
                      "candidates' interpenetration sweeps launched together on the accelerator, rollouts in C; "
                      "bench/candidates_mjx.py). Default c")
+    run.add_argument("--compile-cache", default=DEFAULT_CACHE_DIR, metavar="DIR",
+                     help="with --physics-backend mjx: keep this run's compiled programs (the checks' launches, the "
+                     "decoder's) here for the next run (default: %(default)s; '' turns it off; "
+                     "JAX_COMPILATION_CACHE_DIR wins)")
     run.add_argument("--sources", nargs="*", default=[], metavar="FOLDER",
                      help="folders holding the source objects of imported records (their part meshes for the "
                      "physics verdict), e.g. the PartNet-Mobility folders given to data import")
