@@ -4,11 +4,12 @@ together into one ``mjx_batch`` launch and sends each worker its distances back.
 
 The CPU work of a check (collision pieces, guides, rollouts) stays in the workers, so the
 accelerator is fed by every core while it runs the interpenetration sweep of many objects at once.
-A candidate set's board-crossing queries (``crossing.crossing_plan``) come as one request of their
+A candidate set's board-crossing plans (``crossing.crossing_plan``) come as one request of their
 own when the service takes them (``crossings``: on an accelerator), answered by a
-``crossing_batch`` launch over every such request of the batch. A batch is closed when ``batch_objects`` requests are in or ``wait_s`` has passed
-since the first; a failed launch is sent back to each of its workers as the error. Launches are padded
-to the largest shapes met so far (``mjx_batch.Shapes``), so the sweep compiles only when they grow.
+``crossing_batch`` launch over every such request of the batch. A batch is closed when
+``batch_objects`` requests are in or ``wait_s`` has passed since the first; a failed launch is sent
+back to each of its workers as the error. Launches are padded to the largest shapes met so far
+(``mjx_batch.Shapes``), so the sweep compiles only when they grow.
 """
 
 from __future__ import annotations
@@ -170,8 +171,8 @@ class DeviceClient:
         returned function waits for the replies, so the caller can work while the device does."""
         for a, q in zip(arrays, qpos):
             self.requests.put((self.worker, ("sweep", a), np.asarray(q)))
-        if plans is not None:  # what the launch reads of a plan, in one message: its shared boards are pickled once
-            self.requests.put((self.worker, ("crossings", [_Queries(p.tracks, p.queries) for p in plans]), None))
+        if plans is not None:  # in one message: the boards the plans share are pickled once
+            self.requests.put((self.worker, ("crossings", list(plans)), None))
 
         def wait() -> tuple[list[np.ndarray], list[list[int | None]] | None]:
             results = self._replies(len(arrays) + (plans is not None))
@@ -185,14 +186,6 @@ class DeviceClient:
             if isinstance(result, Exception):
                 raise result
         return results
-
-
-@dataclass(frozen=True)
-class _Queries:
-    """A crossing plan's tracks and queries: what ``crossing_batch`` reads of it."""
-
-    tracks: tuple
-    queries: tuple
 
 
 def init_worker(requests, replies, next_worker, crossings: bool = False) -> None:

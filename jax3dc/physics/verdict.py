@@ -122,12 +122,10 @@ def penetration_model(structure: Structure, parts: dict[int, trimesh.Trimesh], i
 
 
 def verdict_from(structure: Structure, parts: dict[int, trimesh.Trimesh], inputs: KinematicInputs, distances: np.ndarray,
-                 rollout: Rollout, mounted: bool, names: Sequence[str],
-                 crossed: dict[int, tuple[int, float]] | None = None) -> tuple[Verdict, dict[int, Any]]:
+                 rollout: Rollout, mounted: bool, names: Sequence[str]) -> tuple[Verdict, dict[int, Any]]:
     """The verdict of the checks ``names`` and the penetration curves, given the contact distances
-    over ``inputs.states`` (C's proximity itself, or a penetration query's) and, where a batched
-    launch found them, the board crossings of ``crossing_plan_of`` (else they are found here)."""
-    run = CheckRun(structure, parts, inputs.sim, inputs.states, distances, inputs.proximity, rollout, mounted, crossed)
+    over ``inputs.states`` (C's proximity itself, or a penetration query's)."""
+    run = CheckRun(structure, parts, inputs.sim, inputs.states, distances, inputs.proximity, rollout, mounted)
     return run_checks(run, names), penetration_curves(inputs.sim, inputs.states, distances)
 
 
@@ -151,7 +149,9 @@ class CheckRun:
     """What every check reads: the object, its kinematic model, the checked joint states and the
     contact distances over them ([S, nbody, nbody], m; ``proximity``: contacts within the
     detachment margin, the same array on the C path), and how the dynamic checks roll out. The
-    arrays the kinematic checks share are computed once, on first use."""
+    arrays the kinematic checks share are computed once, on first use. ``distances`` is None in a
+    run of the DISTANCE_FREE_CHECKS alone; ``given_crossings``: the board crossings when a batched
+    launch found them (``crossing_plan_of``), else ``crossed`` finds them."""
 
     structure: Structure
     parts: dict[int, trimesh.Trimesh]
