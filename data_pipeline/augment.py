@@ -7,6 +7,11 @@
 * merge: two sibling leaves that are both rigid, or whose joints match within tolerance (same
   type, parallel axes, pivots on the same axis line, same range), become one part; ids above
   the removed one shift down so ids stay 1..N.
+* fuse: every rigid leaf that sits on a moving part (a door's handle, a lid's latch, a laptop
+  lid's display) or is a handle or knob becomes part of the mesh it sits on. The factories model
+  such pieces as parts of their own, while a real object's link carries its handle in the same
+  mesh: S then shows a door with no handle, and the model must find the handle in I to put the
+  hinge on the other edge. Training on both conventions keeps that from marking the domain.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from jax3dc.structure import Joint, Structure
 AXIS_TOL = 1e-3
 PIVOT_TOL = 1e-3
 RANGE_TOL = 1e-3
+FUSED_NAMES = ("handle", "knob", "latch")  # rigid leaves fused wherever they sit (names contain one)
 
 
 def leaves(structure: Structure) -> list[int]:
@@ -78,12 +84,43 @@ def merge_parts(obj: SourceObject, rng: np.random.Generator) -> SourceObject | N
     if not pairs:
         return None
     keep, gone = pairs[int(rng.integers(len(pairs)))]
+    return replace(_remove_part(obj, gone, keep), program=None, parameters=None, augmentation=f"merge-{keep}-{gone}")
+
+
+def _remove_part(obj: SourceObject, gone: int, into: int) -> SourceObject:
+    """``obj`` with part ``gone``'s mesh added to part ``into``'s and ``gone`` removed; ids above it
+    shift down so ids stay 1..N. Only support relations are kept (those not naming ``gone``): the
+    symmetric and instance ones no longer hold for a changed mesh, and records find them again
+    from the meshes (``object_records``)."""
+    s = obj.structure
     renumber = {p: p - (p > gone) for p in s.nodes if p != gone}
     nodes = {renumber[p]: replace(n, parent=None if n.parent is None else renumber[n.parent])
              for p, n in s.nodes.items() if p != gone}
     relations = tuple(replace(r, a=renumber[r.a], b=renumber[r.b]) for r in s.relations
                       if gone not in (r.a, r.b) and r.type == "support")
     parts = {renumber[p]: m for p, m in obj.parts.items() if p != gone}
-    parts[renumber[keep]] = trimesh.util.concatenate([obj.parts[keep], obj.parts[gone]])
-    return replace(obj, structure=replace(s, nodes=nodes, relations=relations), parts=parts, program=None,
-                   parameters=None, augmentation=f"merge-{keep}-{gone}")
+    parts[renumber[into]] = trimesh.util.concatenate([obj.parts[into], obj.parts[gone]])
+    return replace(obj, structure=replace(s, nodes=nodes, relations=relations), parts=parts)
+
+
+def _fusable(s: Structure, pid: int) -> bool:
+    node = s.nodes[pid]
+    if node.joint is not None or node.parent is None:
+        return False
+    named = any(word in (node.name or "") for word in FUSED_NAMES)
+    return named or s.nodes[node.parent].joint is not None
+
+
+def fuse_handles(obj: SourceObject) -> SourceObject | None:
+    """``obj`` with its handles, knobs and the other rigid leaves of moving parts fused into the
+    parts they sit on (repeatedly, so a leaf's leaf goes too), or None when nothing fuses."""
+    fused = obj
+    while True:
+        s = fused.structure
+        found = [p for p in leaves(s) if _fusable(s, p)]
+        if not found:
+            break
+        fused = _remove_part(fused, found[-1], s.nodes[found[-1]].parent)  # the highest id: lower ids keep
+    if fused is obj:
+        return None
+    return replace(fused, program=None, parameters=None, augmentation="fuse")

@@ -22,16 +22,15 @@ from typing import Callable
 
 from tqdm import tqdm
 
-from data_pipeline.augment import merge_parts, split_part
+from data_pipeline.augment import fuse_handles, merge_parts, split_part
 from data_pipeline.importers.object_ids import object_ids
 from data_pipeline.importers.source import import_object
 from data_pipeline.mirror import mirrored
-from data_pipeline.samples import SourceObject, derived_rng, factory_source, object_records, split_of
+from data_pipeline.samples import BUILD_APPEARANCES, SourceObject, derived_rng, factory_source, object_records, split_of
 from data_pipeline.scenes import make_scene
 from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
 from jax3dc.errors import InputFileError, SetupError
 from jax3dc.factories import FACTORIES, object_id
-from jax3dc.render import APPEARANCES
 
 
 @dataclass(frozen=True)
@@ -61,9 +60,10 @@ class BuildConfig:
     objects_per_shard: int
     augment: bool = False  # also one split and one merge variant per object (one view each)
     split: str = "hash"  # "hash": by SHA-256 of the object id; "train" / "val" / "test": every object there
-    appearance: str = "plain"  # look of I: "plain" (one look) or "varied" (lights, backdrop, colours, camera)
+    appearance: str = "plain"  # look of I: "plain" (one look), "varied" (lights, backdrop, colours, camera) or "mixed" (either, per view)
     mirror: bool = False  # also every view of each object's mirror image (data_pipeline.mirror)
     palette_per_view: bool = False  # S colours permuted per view, not per object: no colour set names an object
+    fuse_handles: bool = False  # also every view of each object with its handles fused (data_pipeline.augment)
 
 
 SPLIT_CHOICES = ("hash", "train", "val", "test")
@@ -126,12 +126,12 @@ def load_sources(spec: SourceSpec) -> list[SourceObject]:
 def config_doc(config: BuildConfig) -> dict:
     """The config as a manifest records it: ``appearance`` only when it is not "plain", so a plain
     build writes (and resumes) the manifest of builds made before the option existed."""
-    if config.appearance not in APPEARANCES:
-        raise ValueError(f"appearance must be one of {', '.join(APPEARANCES)}, not {config.appearance!r}")
+    if config.appearance not in BUILD_APPEARANCES:
+        raise ValueError(f"appearance must be one of {', '.join(BUILD_APPEARANCES)}, not {config.appearance!r}")
     doc = asdict(config)
     if doc.get("appearance") == "plain":
         del doc["appearance"]
-    for flag in ("mirror", "palette_per_view"):  # absent when off: the manifests of older builds still match
+    for flag in ("mirror", "palette_per_view", "fuse_handles"):  # absent when off: the manifests of older builds still match
         if not doc.get(flag):
             doc.pop(flag, None)
     return doc
@@ -139,6 +139,7 @@ def config_doc(config: BuildConfig) -> dict:
 
 def spec_records(spec: SourceSpec, split: str, config: BuildConfig):
     """The records of one source: its views, with ``config.mirror`` every view of its mirror image,
+    with ``config.fuse_handles`` every view of it with its handles fused into the parts they sit on,
     and with ``config.augment`` its split and merge variants (one view each)."""
     objects = load_sources(spec)
     for warning in objects[0].warnings:  # printed by the worker that built the object: once per build
@@ -154,6 +155,8 @@ def spec_records(spec: SourceSpec, split: str, config: BuildConfig):
         return
     if config.mirror:
         yield from records(mirrored(objects[0]), config.views)
+    if config.fuse_handles and (fused := fuse_handles(objects[0])) is not None:
+        yield from records(fused, config.views)
     if config.augment:
         rng = derived_rng(config.seed, "augment", objects[0].object_id)
         for variant in (split_part(objects[0], rng), merge_parts(objects[0], rng)):

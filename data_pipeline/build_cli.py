@@ -57,13 +57,17 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--augment", action="store_true",
                         help="also render a split variant (an articulated leaf cut in two) and a merge variant "
                         "(two compatible sibling leaves joined) of each object, one view each")
-    parser.add_argument("--appearance", choices=("plain", "varied"), default="plain",
+    parser.add_argument("--appearance", choices=("plain", "varied", "mixed"), default="plain",
                         help="look of the images I (S is the same either way): plain = one lighting, black "
                         "background, material colours, fixed field of view (default); varied = random lights, "
                         "sky / floor, jittered part colours and textures, camera distance and field of view, "
-                        "all from the build seed")
+                        "all from the build seed; mixed = each view plain or varied with equal odds, so that "
+                        "no look marks where an object comes from")
     parser.add_argument("--mirror", action="store_true",
                         help="also render every view of each object's mirror image (x -> -x; hinges change side)")
+    parser.add_argument("--fuse-handles", action="store_true",
+                        help="also render every view of each object with its handles, knobs and the rigid pieces "
+                        "of its moving parts fused into the parts they sit on, as real meshes have them")
     parser.add_argument("--palette-per-view", action="store_true",
                         help="permute S's colours per view instead of per object (a training augmentation)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
@@ -107,7 +111,8 @@ def _run(args: argparse.Namespace, sources: list) -> int:
         raise SystemExit("--views, --workers, --objects-per-shard must be >= 1 and --size >= 16")
     config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard,
                          augment=args.augment, split=getattr(args, "split", "hash"),
-                         appearance=args.appearance, mirror=args.mirror, palette_per_view=args.palette_per_view)
+                         appearance=args.appearance, mirror=args.mirror, palette_per_view=args.palette_per_view,
+                         fuse_handles=args.fuse_handles)
     manifest = run_build(args.out, sources, config, args.workers, progress=not args.quiet)
     total = sum(s["records"] for s in manifest["shards"].values())
     skipped = len(manifest.get("skipped", {}))

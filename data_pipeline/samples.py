@@ -28,6 +28,7 @@ from jax3dc.relations import with_extracted_relations
 from jax3dc.structure import Structure, boxes_to_dict, canonicalize, to_json
 
 SPLITS = (("train", 0.90), ("val", 0.95), ("test", 1.0))
+BUILD_APPEARANCES = (*APPEARANCES, "mixed")  # the renderer's looks, and a build's per-view mix of them
 
 
 @dataclass(frozen=True)
@@ -73,28 +74,36 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
     textures, camera distance and field of view drawn from their own generators, derived from the
     object's keys plus "appearance" (per object) and the view number (per view); the poses,
     azimuth and elevation come from the object's generator exactly as in "plain", so S of a
-    varied view equals the plain S of the same pose and camera.
+    varied view equals the plain S of the same pose and camera. "mixed": each view plain or
+    varied with equal odds (its own generator), so that every source is seen in both looks and the
+    look cannot tell a model which domain (factory or real) an object comes from; a plain view of
+    a mixed build is byte for byte the plain build's, a varied one the varied build's.
 
     ``palette_per_view``: each view's S and legend take the palette of its own key (a training
     augmentation: colours then name no object, so a model cannot recall an answer by them)."""
-    if appearance not in APPEARANCES:
-        raise ValueError(f"appearance must be one of {', '.join(APPEARANCES)}, not {appearance!r}")
+    if appearance not in BUILD_APPEARANCES:
+        raise ValueError(f"appearance must be one of {', '.join(BUILD_APPEARANCES)}, not {appearance!r}")
     keys = (seed, obj.category, obj.object_id, obj.augmentation or "")
     rng = derived_rng(*keys)
     palette = object_palette(obj.category, obj.object_id)
     rgba, lighting = part_rgba(obj.structure, rng), sample_lighting(rng)  # drawn in both looks: same poses after
-    look = sample_appearance(obj.structure, derived_rng(*keys, "appearance")) if appearance == "varied" else None
-    renderer = PartRenderer(obj.parts, rgba, lighting, size, look)
+    looks = view_looks(keys, views, appearance)
+    look = sample_appearance(obj.structure, derived_rng(*keys, "appearance")) if "varied" in looks else None
+    renderers: dict[str, PartRenderer] = {}  # made on first use: a mixed object may need both
     try:
         records = []
         for view in range(views):
+            if looks[view] not in renderers:
+                renderers[looks[view]] = PartRenderer(obj.parts, rgba, lighting, size,
+                                                      look if looks[view] == "varied" else None)
+            renderer = renderers[looks[view]]
             posed = sample_view_pose(obj.structure, obj.parts, view, rng)
             lo = np.min([m.bounds[0] for m in posed.parts.values()], axis=0)
             hi = np.max([m.bounds[1] for m in posed.parts.values()], axis=0)
             radius = float(np.linalg.norm(hi - lo)) / 2.0
             camera = sample_camera(rng, centre=(lo + hi) / 2.0, radius=radius)
             view_lighting = None
-            if look is not None:
+            if looks[view] == "varied":
                 view_rng = derived_rng(*keys, "appearance", view)
                 camera = vary_camera(camera, radius, view_rng)
                 view_lighting = sample_view_lighting(view_rng)
@@ -113,8 +122,8 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
                 "moved_joint": posed.moved_joint, "theta": round(posed.theta, 4),
                 "hidden_parts": sorted(set(obj.parts) - visible), "size": size,
             }
-            if look is not None:
-                meta["appearance"] = appearance
+            if appearance != "plain":
+                meta["appearance"] = looks[view]
             if palette_per_view:
                 meta["palette_key"] = key
             records.append(Record(
@@ -124,4 +133,13 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
                 parameters=obj.parameters, meta=meta))
         return records
     finally:
-        renderer.close()
+        for renderer in renderers.values():
+            renderer.close()
+
+
+def view_looks(keys: tuple, views: int, appearance: str) -> list[str]:
+    """The look ("plain" or "varied") of each view; "mixed" draws each from the object's keys and
+    the view number alone, so a view's look never depends on how many views are made."""
+    if appearance != "mixed":
+        return [appearance] * views
+    return ["varied" if derived_rng(*keys, "look", view).random() < 0.5 else "plain" for view in range(views)]

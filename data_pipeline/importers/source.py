@@ -9,6 +9,7 @@ from data_pipeline.importers.assemble import ImportedObject, assemble
 from data_pipeline.importers.frames import FRONTS
 from data_pipeline.importers.limits import ImportLimits
 from data_pipeline.importers.mjcf import read_mjcf
+from data_pipeline.importers.output import is_converted, read_imported
 from data_pipeline.importers.safe_xml import parse_xml
 from data_pipeline.importers.urdf import read_urdf
 from jax3dc.errors import InputFileError
@@ -88,7 +89,14 @@ def import_object(
     ``limits`` caps what the files may make us load and keeps mesh paths inside the object's folder.
     ``bounds_only`` (URDF; an MJCF is always read in full) makes every mesh file its bounding box:
     structure, joints and part boxes without the surfaces, for fast checks over a whole dataset.
+    A folder that ``jax3dc data convert`` wrote is read back as it is: its frame and units are
+    already the project's, so ``metres_per_unit`` and ``front`` cannot apply to it.
     """
+    if is_converted(Path(path)):
+        if metres_per_unit is not None or front is not None:
+            raise InputFileError(Path(path), "a converted object is already in the normalised frame: "
+                                 "its front and units cannot be set again")
+        return read_imported(Path(path))
     source, fmt = find_source(Path(path))
     if front is not None and front not in FRONTS:
         raise InputFileError(source, f"front must be one of {FRONTS}, got {front!r}")

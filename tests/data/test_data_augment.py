@@ -2,12 +2,12 @@
 
 import pytest
 
-from data_pipeline.augment import joints_match, merge_parts, split_part
+from data_pipeline.augment import fuse_handles, joints_match, merge_parts, split_part
 from data_pipeline.build import BuildConfig, factory_sources, run_build
 from jax3dc.factories import generate_object
 from jax3dc.render import png_array
 from tests.data.segmentation_ids import decode_segmentation
-from data_pipeline.samples import SourceObject, derived_rng, object_records
+from data_pipeline.samples import SourceObject, derived_rng, factory_source, object_records
 from data_pipeline.shards import read_dataset
 from jax3dc.palette import object_palette
 from jax3dc.structure import parse_structure
@@ -61,3 +61,23 @@ def test_build_with_augment_adds_variant_records(tmp_path):
     for r in records:
         base = next(x for x in records if x.meta["object_id"] == r.meta["object_id"])
         assert r.meta["split"] == base.meta["split"]
+
+
+def test_fuse_puts_handles_into_the_parts_they_sit_on():
+    """A cabinet's handles (rigid leaves of its doors and drawer) become part of those meshes: the
+    surface is kept, ids stay 1..N and every joint still moves the same geometry."""
+    obj = factory_source("cabinet", 3)
+    fused = fuse_handles(obj)
+    s, f = obj.structure, fused.structure
+    handles = [p for p, n in s.nodes.items() if n.name == "handle"]
+    assert handles and sorted(f.nodes) == list(range(1, len(s.nodes) - len(handles) + 1))
+    assert not any(n.name == "handle" for n in f.nodes.values())
+    assert sum(len(m.faces) for m in fused.parts.values()) == sum(len(m.faces) for m in obj.parts.values())
+    assert sorted(j.pivot for j in f.joints().values()) == sorted(j.pivot for j in s.joints().values())
+    for pid, node in f.nodes.items():
+        if node.name in ("door", "drawer"):
+            old = next(p for p, n in s.nodes.items() if n.joint == node.joint)
+            expected = len(obj.parts[old].faces) + sum(len(obj.parts[c].faces) for c in s.children(old))
+            assert len(fused.parts[pid].faces) == expected
+    assert fused.augmentation == "fuse" and fused.program is None
+    assert fuse_handles(fused) is None  # nothing left to fuse

@@ -50,3 +50,35 @@ def test_convert_errors_are_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "nothing" in err and len(err.splitlines()) == 1
     assert main(["data"]) == 2  # no subcommand: usage
+
+
+def test_a_converted_folder_imports_as_its_source(tmp_path):
+    """`data import` reads what `data convert` wrote (the form in which a pool travels) and renders
+    the records of the source itself; a converted folder's front and units cannot be set again,
+    and a structure that names a missing part file is refused with the folder named."""
+    from data_pipeline.build import BuildConfig, import_sources, run_build
+    from data_pipeline.importers.source import import_object
+    from data_pipeline.shards import read_dataset
+    from jax3dc.errors import InputFileError
+    from jax3dc.render import png_array
+
+    source = partnet_object("door_8877")
+    converted = tmp_path / "door_8877"
+    assert main(["data", "convert", str(source), "--out", str(converted), "--quiet"]) == 0
+    config = BuildConfig(views=2, seed=1, size=48, objects_per_shard=4, split="test")
+    records = {}
+    for name, path in (("source", source), ("converted", converted)):
+        run_build(tmp_path / name, import_sources([path]), config, workers=1, progress=False)
+        records[name] = list(read_dataset(tmp_path / name))
+    (rest, *moved), (rest_c, *moved_c) = records["source"], records["converted"]
+    assert (rest_c.image_png, rest_c.seg_png, rest_c.prompt, rest_c.target) == (
+        rest.image_png, rest.seg_png, rest.prompt, rest.target)
+    assert len(moved) == len(moved_c) == 1  # moved views: the text's rounding of a pivot may move a pixel
+    assert (moved_c[0].key, moved_c[0].seg_png, moved_c[0].target) == (moved[0].key, moved[0].seg_png, moved[0].target)
+    changed = np.abs(png_array(moved_c[0].image_png).astype(int) - png_array(moved[0].image_png).astype(int)) > 8
+    assert changed.mean() < 0.01
+    with pytest.raises(InputFileError, match="front and units"):
+        import_object(converted, front="-x")
+    max(converted.glob("parts/*.obj"), key=lambda p: int(p.stem)).unlink()
+    with pytest.raises(InputFileError, match=str(converted.name)):
+        import_object(converted)
