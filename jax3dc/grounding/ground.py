@@ -26,19 +26,17 @@ the validator to judge).
 """
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from jax3dc.errors import StructureError
 from jax3dc.grounding.features import LINES, cross_dims, joint_features, line_features
 from jax3dc.grounding.prior import CLASSES, JointPrior, shipped_prior
+from jax3dc.structure.rewrite import rewrite_structure
 from jax3dc.structure.schema import Box, Joint, Structure
 from jax3dc.structure.serialize import to_dict
-from jax3dc.structure.validate import parse_structure
 
 AXIS_SNAP = 0.35  # rad (20°): a written axis this close to a box direction is snapped onto it
 SLIDE_OPENING = 0.8  # a new slide's travel, as a fraction of its part's side along the axis (real median)
@@ -167,13 +165,7 @@ def ground_text(text: str, boxes: Mapping[int, Box], grounding: Grounding) -> st
     the stop token after it) is replaced; a text whose JSON does not parse and validate against
     the legend's part ids is returned unchanged, so the validator reports the model's own error.
     """
-    start, end = text.find("{"), text.rfind("}") + 1
-    if not boxes or not 0 <= start < end:
+    if not boxes:
         return text
-    try:
-        structure = parse_structure(text[start:end], part_ids=boxes.keys())
-    except StructureError:
-        return text
-    grounded = ground_structure(structure, boxes, grounding)
-    doc = json.dumps(to_dict(grounded), separators=(",", ":"), ensure_ascii=False, allow_nan=False)
-    return text[:start] + doc + text[end:]
+    return rewrite_structure(text, boxes.keys(),
+                             lambda structure, _: to_dict(ground_structure(structure, boxes, grounding)))

@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from jax3dc.errors import InputFileError
+from jax3dc.structure.rewrite import rewrite_json
 from jax3dc.structure.schema import Box, Joint, Structure, Vec3
 from jax3dc.structure.serialize import to_json
 from jax3dc.structure.validate import parse_structure
@@ -116,24 +117,21 @@ def text_to_absolute(text: str, boxes: Mapping[int, Box], frame: PivotFrame) -> 
     """
     if frame.name == "absolute":
         return text
-    start, end = text.find("{"), text.rfind("}") + 1  # an unconstrained model may fence its JSON
-    try:
-        doc = json.loads(text[start:end]) if 0 <= start < end else None
-    except (ValueError, RecursionError):
-        return text
-    nodes = doc.get("nodes") if isinstance(doc, dict) else None
-    if not isinstance(nodes, dict):
-        return text
-    changed = False
-    for key, node in nodes.items():
-        joint = node.get("joint") if isinstance(node, dict) else None
-        pivot = joint.get("pivot") if isinstance(joint, dict) else None
-        box = boxes.get(int(key)) if isinstance(key, str) and key.isdigit() else None
-        if box is None or not (isinstance(pivot, list) and len(pivot) == 3
-                               and all(isinstance(v, int | float) and not isinstance(v, bool) for v in pivot)):
-            continue
-        joint["pivot"] = [round(v, 4) + 0.0 for v in pivot_from_box(tuple(pivot), box, frame.floor)]
-        changed = True
-    if not changed:
-        return text
-    return text[:start] + json.dumps(doc, separators=(",", ":"), ensure_ascii=False) + text[end:]
+
+    def absolute(doc: object) -> object | None:
+        nodes = doc.get("nodes") if isinstance(doc, dict) else None
+        if not isinstance(nodes, dict):
+            return None
+        changed = False
+        for key, node in nodes.items():
+            joint = node.get("joint") if isinstance(node, dict) else None
+            pivot = joint.get("pivot") if isinstance(joint, dict) else None
+            box = boxes.get(int(key)) if isinstance(key, str) and key.isdigit() else None
+            if box is None or not (isinstance(pivot, list) and len(pivot) == 3
+                                   and all(isinstance(v, int | float) and not isinstance(v, bool) for v in pivot)):
+                continue
+            joint["pivot"] = [round(v, 4) + 0.0 for v in pivot_from_box(tuple(pivot), box, frame.floor)]
+            changed = True
+        return doc if changed else None
+
+    return rewrite_json(text, absolute)

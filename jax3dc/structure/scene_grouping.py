@@ -42,11 +42,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from jax3dc.errors import StructureError
 from jax3dc.structure.canonical import reroot
+from jax3dc.structure.rewrite import rewrite_structure
 from jax3dc.structure.schema import Box, Structure
 from jax3dc.structure.serialize import to_dict
-from jax3dc.structure.validate import parse_structure
 
 CONTACT_TOLERANCE = 0.004
 """nu: the largest gap between two boxes that still counts as contact. Legend numbers carry 3
@@ -295,23 +294,20 @@ def regroup_text(text: str, boxes: Mapping[int, Box], tol: float = CONTACT_TOLER
     """A generated document regrouped (``regroup``); only parents and joints of the nodes that
     change are rewritten. A text that does not validate against the legend's ids is returned as
     it is (validation reports it downstream, as it should)."""
-    start, end = text.find("{"), text.rfind("}") + 1
-    try:
-        structure = parse_structure(text[start:end], part_ids=boxes) if 0 <= start < end else None
-    except StructureError:
-        return text
-    if structure is None:
-        return text
-    grouped = regroup(structure, boxes, tol)
-    changed = [p for p in grouped.nodes if grouped.nodes[p] != structure.nodes[p]]
-    if not changed:
-        return text
-    doc = json.loads(text[start:end])
-    written = to_dict(grouped)["nodes"]
-    for pid in changed:
-        node = doc["nodes"][str(pid)]
-        node["parent"] = grouped.nodes[pid].parent
-        node.pop("joint", None)
-        if "joint" in written[str(pid)]:
-            node["joint"] = written[str(pid)]["joint"]
-    return text[:start] + json.dumps(doc, separators=(",", ":"), ensure_ascii=False) + text[end:]
+
+    def regrouped(structure: Structure, written: str) -> dict | None:
+        grouped = regroup(structure, boxes, tol)
+        changed = [p for p in grouped.nodes if grouped.nodes[p] != structure.nodes[p]]
+        if not changed:
+            return None
+        doc = json.loads(written)
+        nodes = to_dict(grouped)["nodes"]
+        for pid in changed:
+            node = doc["nodes"][str(pid)]
+            node["parent"] = grouped.nodes[pid].parent
+            node.pop("joint", None)
+            if "joint" in nodes[str(pid)]:
+                node["joint"] = nodes[str(pid)]["joint"]
+        return doc
+
+    return rewrite_structure(text, boxes, regrouped)
