@@ -9,7 +9,9 @@
              what is there, so a killed call resumes
 3. baselines `jax3dc eval baselines` on the same references (star, heuristic)
 4. score     per set and system: Table 1 (Table 2 for scenes) with failure attribution; on plain sets
-             also success per category and per joint type, and hinge-edge accuracy: the share of
+             also success per category, per joint type and per look (a mixed build's records carry
+             theirs), reference joints right over every category and over the door-like ones
+             (DOOR_LIKE), and hinge-edge accuracy: the share of
              reference hinges (axis along a box axis) whose predicted line is the same one of the nine
              lines of the child's box — its four edges, four face centre lines and its centre line —
              nearest to the reference line (an unmatched hinge counts as wrong). OUT/summary.json,
@@ -123,16 +125,24 @@ def hinge_edges(cases: Sequence[Case], refs: Mapping[str, Reference], rows: Sequ
     return {"hinge_edge_acc": 100.0 * right / total if total else None, "hinges": total}
 
 
+DOOR_LIKE = ("Dishwasher", "Microwave", "Oven", "Refrigerator", "Safe", "WashingMachine", "Toilet", "TrashCan")
+"""PartNet-Mobility categories whose joints are mostly doors and lids: where the hinge edge is read."""
+
+
 def breakdown(cases: Sequence[Case], rows: Sequence[Mapping[str, Any]], group: Mapping[str, str]) -> dict[str, dict]:
-    """Success and joint counts per group (a category) of the cases' keys."""
-    out: dict[str, dict] = defaultdict(lambda: {"records": 0, "joints": 0, "success": 0})
+    """Per group (a category, a look) of the cases' keys: records, matched joints, their successes,
+    and the reference's joints, so that both the share of matched joints that pass (the paper's
+    success) and the share of reference joints right can be read."""
+    out: dict[str, dict] = defaultdict(lambda: {"records": 0, "joints": 0, "success": 0, "ref_joints": 0})
     for case, row in zip(cases, rows):
         g = out[group[case.key]]
         g["records"] += 1
+        g["ref_joints"] += len(case.reference.joints())
         for m in row.get("matches", []):
             g["joints"] += 1
             g["success"] += m["gate"] == "success"
-    return {k: {**v, "success_pct": 100.0 * v["success"] / v["joints"] if v["joints"] else None}
+    return {k: {**v, "success_pct": 100.0 * v["success"] / v["joints"] if v["joints"] else None,
+                "ref_right_pct": 100.0 * v["success"] / v["ref_joints"] if v["ref_joints"] else None}
             for k, v in sorted(out.items())}
 
 
@@ -155,6 +165,11 @@ def score(refs: Sequence[Reference], preds: Mapping[str, Any], records: Sequence
     if records and kind_of(records[0]) != "scene":
         category = {r.key: str(r.meta.get("category")) for r in records}
         out["per_category"] = breakdown(cases, evaluation.rows, category)
+        out["door_like"] = breakdown(cases, evaluation.rows, {k: str(c in DOOR_LIKE) for k, c in category.items()}).get(
+            "True")
+        out["all_joints"] = breakdown(cases, evaluation.rows, {k: "all" for k in category})["all"]
+        out["per_look"] = breakdown(cases, evaluation.rows, {r.key: str(r.meta.get("appearance") or "plain")
+                                                             for r in records})
         out["per_joint_type"] = by_joint_type(cases, evaluation.rows)
         out.update(hinge_edges(cases, {r.key: r for r in subset}, evaluation.rows))
     return out
@@ -162,6 +177,11 @@ def score(refs: Sequence[Reference], preds: Mapping[str, Any], records: Sequence
 
 def _cell(v: Any, key: str) -> str:
     return "-" if v is None else f"{v:.3f}" if key == "pos_err" else f"{v:.1f}"
+
+
+def _right(group: Mapping[str, Any] | None) -> str:
+    """"k of n" reference joints right, or "-" for no group."""
+    return "-" if not group else f"{group['success']} of {group['ref_joints']}"
 
 
 def table(title: str, columns: Sequence[str], rows: Mapping[str, Mapping[str, Any]]) -> str:
@@ -199,13 +219,23 @@ def report(results: Mapping[str, Mapping[str, dict]]) -> str:
         for t in ("hinge", "slide"):
             cells = [_cell(r.get("per_joint_type", {}).get(t, {}).get("success_pct"), "") for r in systems.values()]
             lines.append(f"| all {t}s | - | " + " | ".join(cells) + " |")
+        for label, field in (("door-like categories", "door_like"), ("every category", "all_joints")):
+            first = next(iter(systems.values())).get(field) or {}
+            cells = [_right(r.get(field)) for r in systems.values()]
+            lines.append(f"| {label}: reference joints right | {first.get('ref_joints', 0)} | " + " | ".join(cells) + " |")
+        looks = sorted({look for r in systems.values() for look in r.get("per_look", {})})
+        if len(looks) > 1:
+            for look in looks:
+                cells = [_cell((r.get("per_look", {}).get(look) or {}).get("success_pct"), "") for r in systems.values()]
+                lines.append(f"| {look} look: success | - | " + " | ".join(cells) + " |")
         parts.append("\n".join(lines) + "\n")
     return "\n".join(parts)
 
 
 def run(a: argparse.Namespace) -> dict:
     out = Path(a.out)
-    sources = {name: Path(p) for name, p in (("heldout", a.heldout), ("fixtures", a.fixtures),
+    sources = {name: Path(p) for name, p in (("heldout", a.heldout), ("heldout_varied", a.heldout_varied),
+                                              ("fixtures", a.fixtures), ("fixtures_varied", a.fixtures_varied),
                                               ("procedural", a.procedural)) if p}
     caps = {"plain": a.plain, "split": a.variants, "merge": a.variants, "scene": a.scenes}
     models = {"model": a.model, **({"compare": a.compare} if a.compare else {})}
@@ -238,6 +268,9 @@ def main(argv: Iterable[str] | None = None) -> dict:
     p.add_argument("--compare", default="", help="another model folder scored on the same records (the shipped one)")
     p.add_argument("--heldout", default="", help="shards of the held-out fifth of the real pool (bench.real_split)")
     p.add_argument("--fixtures", default="", help="shards of the 9 real test fixtures")
+    p.add_argument("--heldout-varied", default="", help="the held-out fifth imported in the varied look "
+                   "(`data import --appearance varied`): the same objects, to measure what the look changes")
+    p.add_argument("--fixtures-varied", default="", help="the fixtures imported in the varied look")
     p.add_argument("--procedural", default="", help="a `jax3dc data build` folder; its test split is scored")
     p.add_argument("--out", required=True)
     p.add_argument("--plain", type=int, default=300, help="records per plain set at most")

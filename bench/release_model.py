@@ -33,6 +33,7 @@ import os
 import shutil
 import time
 from pathlib import Path
+from typing import Sequence
 
 import jax.numpy as jnp
 
@@ -57,17 +58,32 @@ def _sets(overrides: list[str]) -> list[str]:
     return [x for o in overrides for x in ("--set", o)]
 
 
-def training_mix(data: str, real: str, real_weight: float, code_weight: float
-                 ) -> tuple[list[str], list[str], list[float]]:
+def training_mix(data: str, real: str, real_weight: float, code_weight: float,
+                 extra: Sequence[tuple[str, float]] = ()) -> tuple[list[str], list[str], list[float]]:
     """The training sources, their tasks and shares of examples: the procedural build, each
     comma-separated folder of ``real`` (several imports of the pool, e.g. two looks of the same
-    objects, split ``real_weight`` equally) and, with ``code_weight``, the build again as the code task."""
+    objects, split ``real_weight`` equally), each ``extra`` folder at its own share (e.g. objects
+    composed from real parts) and, with ``code_weight``, the build again as the code task."""
     reals = [d for d in real.split(",") if d]
-    datasets = [data, *reals] + ([data] if code_weight else [])
-    tasks = ["structure"] * (1 + len(reals)) + ["code"] * bool(code_weight)
-    real_shares = [real_weight / len(reals)] * len(reals) if reals else []
-    weights = [1 - sum(real_shares) - code_weight, *real_shares] + ([code_weight] if code_weight else [])
+    datasets = [data, *reals, *(d for d, _ in extra)] + ([data] if code_weight else [])
+    tasks = ["structure"] * (1 + len(reals) + len(extra)) + ["code"] * bool(code_weight)
+    shares = ([real_weight / len(reals)] * len(reals) if reals else []) + [w for _, w in extra]
+    weights = [1 - sum(shares) - code_weight, *shares] + ([code_weight] if code_weight else [])
+    if weights[0] <= 0:
+        raise SystemExit(f"the shares of the other sources ({sum(shares) + code_weight:g}) leave the build none")
     return datasets, tasks, weights
+
+
+def mix_entry(text: str) -> tuple[str, float]:
+    """``DIR=SHARE`` of ``--mix``."""
+    folder, sep, share = text.rpartition("=")
+    try:
+        value = float(share)
+    except ValueError:
+        value = -1.0
+    if not sep or not folder or not 0 < value < 1:
+        raise argparse.ArgumentTypeError(f"expected DIR=SHARE with 0 < SHARE < 1, got {text!r}")
+    return folder, value
 
 
 def _last_step(train_dir: Path) -> int:
@@ -119,6 +135,9 @@ def main() -> None:
     p.add_argument("--real", default="", help="shards of imported real training objects (train split); several "
                    "folders, comma-separated (e.g. two looks of the same objects), share --real-weight equally")
     p.add_argument("--real-weight", type=float, default=0.1, help="share of training examples from --real")
+    p.add_argument("--mix", type=mix_entry, action="append", default=[], metavar="DIR=SHARE",
+                   help="more training shards at their own share of examples (e.g. objects composed from real "
+                   "parts); repeatable")
     p.add_argument("--heldout", default="", help="shards of the real pool's held-out fifth (bench.real_split), never "
                    "trained on, scored by bench.real_objects")
     p.add_argument("--pivot-frame", default="box", choices=("box", "absolute"),
@@ -170,7 +189,7 @@ def main() -> None:
         if minutes < 1:
             print("[release] no time left for training in this call; run it again", flush=True)
             return
-        datasets, tasks, weights = training_mix(str(data), a.real, a.real_weight, a.code_weight)
+        datasets, tasks, weights = training_mix(str(data), a.real, a.real_weight, a.code_weight, a.mix)
         overrides = [f"data={','.join(datasets)}", f"val_data={data}", f"image_size={a.image_size}", f"seq_len={a.seq_len}",
                      f"batch_size={a.batch}", "grad_accum=1", f"lr={a.lr}", f"warmup_steps={min(200, a.steps // 20)}",
                      f"steps={a.steps}", f"time_limit_min={minutes:.2f}", "freeze=", f"loader_workers={int(workers) - 2}",
