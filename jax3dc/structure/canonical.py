@@ -18,6 +18,7 @@ from jax3dc.errors import StructureError
 from jax3dc.structure.boxes import BOX_DECIMALS
 from jax3dc.structure.schema import Box, Joint, Node, Relation, Structure
 from jax3dc.structure.serialize import round_number, rounded_axis
+from jax3dc.structure.union_find import connected_sets
 
 
 _UNIT_TOLERANCE = 1e-12
@@ -101,30 +102,14 @@ def canonical_relations(relations: tuple[Relation, ...]) -> tuple[Relation, ...]
     """Symmetric pairs with a < b, instance groups as stars at their smallest id, support kept;
     duplicates removed; sorted by (type, a, b)."""
     out: set[tuple[str, int, int, str]] = set()
-    group: dict[int, int] = {}  # union-find over instance edges
-
-    def find(i: int) -> int:
-        group.setdefault(i, i)
-        while group[i] != i:
-            group[i] = group[group[i]]
-            i = group[i]
-        return i
-
+    instances = [(r.a, r.b) for r in relations if r.type == "instance"]
     for r in relations:
-        if r.type == "instance":
-            ra, rb = find(r.a), find(r.b)
-            if ra != rb:
-                group[max(ra, rb)] = min(ra, rb)
-        elif r.type == "symmetric":
+        if r.type == "symmetric":
             out.add((r.type, min(r.a, r.b), max(r.a, r.b), r.plane or ""))
-        else:
+        elif r.type != "instance":
             out.add((r.type, r.a, r.b, r.plane or ""))
-    members: dict[int, list[int]] = {}
-    for i in list(group):
-        members.setdefault(find(i), []).append(i)
-    for ids in members.values():
-        anchor = min(ids)
-        out.update(("instance", anchor, i, "") for i in ids if i != anchor)
+    for anchor, *others in connected_sets({i for pair in instances for i in pair}, instances):
+        out.update(("instance", anchor, i, "") for i in others)
     return tuple(Relation(t, a, b, plane or None) for t, a, b, plane in sorted(out))
 
 

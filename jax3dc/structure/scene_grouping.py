@@ -46,6 +46,7 @@ from jax3dc.structure.canonical import reroot
 from jax3dc.structure.rewrite import rewrite_structure
 from jax3dc.structure.schema import Box, Structure
 from jax3dc.structure.serialize import to_dict
+from jax3dc.structure.union_find import connected_sets
 
 CONTACT_TOLERANCE = 0.004
 """nu: the largest gap between two boxes that still counts as contact. Legend numbers carry 3
@@ -81,21 +82,9 @@ def _corners(boxes: Mapping[int, Box], ids: Iterable[int]) -> tuple[list[int], n
 
 
 def _components(ids: list[int], linked: np.ndarray) -> list[list[int]]:
-    """Connected sets of ``ids`` under the symmetric boolean matrix ``linked``."""
-    label = list(range(len(ids)))
-
-    def find(i: int) -> int:
-        while label[i] != i:
-            label[i] = label[label[i]]
-            i = label[i]
-        return i
-
-    for a, b in zip(*np.nonzero(np.triu(linked, 1))):
-        label[find(int(a))] = find(int(b))
-    groups: dict[int, list[int]] = {}
-    for k, pid in enumerate(ids):
-        groups.setdefault(find(k), []).append(pid)
-    return sorted(groups.values(), key=lambda g: g[0])
+    """Connected sets of ``ids`` under the symmetric boolean matrix ``linked`` (sorted lists,
+    ordered by smallest id)."""
+    return connected_sets(ids, ((ids[a], ids[b]) for a, b in zip(*np.nonzero(np.triu(linked, 1)))))
 
 
 def _touching(lo: np.ndarray, hi: np.ndarray, tol: float) -> np.ndarray:

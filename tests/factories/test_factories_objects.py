@@ -11,6 +11,7 @@ from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.program import run_program, to_blender_script
 from jax3dc.structure import parse_structure, to_json
 from jax3dc.structure.schema import FAMILIES, JOINT_TYPES, PLANES, Structure
+from jax3dc.structure.union_find import connected_sets
 
 SEEDS = (0, 1, 2)
 CATEGORIES = sorted(FACTORIES)
@@ -250,18 +251,10 @@ def test_identical_across_processes_and_hash_seeds():
 
 
 def _instance_groups(relations):
-    group = {}
-
-    def find(i):
-        group.setdefault(i, i)
-        while group[i] != i:
-            i = group[i]
-        return i
-
-    for r in relations:
-        if r.type == "instance":
-            group[find(r.a)] = find(r.b)
-    return find
+    """Part -> the smallest part of its instance group (itself when it is in none)."""
+    pairs = [(r.a, r.b) for r in relations if r.type == "instance"]
+    anchor = {p: group[0] for group in connected_sets({i for pair in pairs for i in pair}, pairs) for p in group}
+    return lambda part: anchor.get(part, part)
 
 
 @pytest.mark.parametrize("category", CATEGORIES)
