@@ -42,6 +42,7 @@ from jax3dc.export.assembly import frames_nu, tree_order
 from jax3dc.structure.schema import Structure
 
 Penetration = Callable[[mujoco.MjModel, np.ndarray], np.ndarray]  # (model, qpos [S, nq]) -> [S, nbody, nbody] distances (m)
+LINE_SAMPLES = 4000  # surface points per mesh that a hinge line's distance is measured to (``surface_points``)
 
 
 def check_object(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float = 1.0,
@@ -423,16 +424,26 @@ def _pivot_attached(structure: Structure, parts: dict[int, trimesh.Trimesh], par
     axis = np.asarray(node.joint.axis, dtype=np.float64)
     axis /= np.linalg.norm(axis)
     pivot = np.asarray(node.joint.pivot, dtype=np.float64)
-
-    def line_distance(mesh: trimesh.Trimesh) -> float:
-        points = np.concatenate([mesh.vertices, mesh.sample(4000, seed=0)]) if len(mesh.faces) else mesh.vertices
-        rel = points - pivot
-        return float(np.min(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
-
     # the parent is the rigid body it is welded into: a stapler's arm parented to the base hinges on
     # the block fixed to that base, the same body in a simulator
-    holder = min(line_distance(parts[p]) for p in welded(structure, node.parent))
-    return line_distance(parts[part]) <= ATTACH_TOL_NU and holder <= ATTACH_TOL_NU
+    holder = min(line_distance(surface_points(parts[p]), pivot, axis) for p in welded(structure, node.parent))
+    return line_distance(surface_points(parts[part]), pivot, axis) <= ATTACH_TOL_NU and holder <= ATTACH_TOL_NU
+
+
+def surface_points(mesh: trimesh.Trimesh) -> np.ndarray:
+    """A mesh's vertices and ``LINE_SAMPLES`` points on its faces (seeded, so the same every time),
+    the points a hinge line's distance to the part is measured to: vertices alone miss a large flat
+    face that the line runs across."""
+    points = np.asarray(mesh.vertices, dtype=np.float64)
+    if len(mesh.faces):
+        points = np.concatenate([points, mesh.sample(LINE_SAMPLES, seed=0)])
+    return points
+
+
+def line_distance(points: np.ndarray, pivot: np.ndarray, axis: np.ndarray) -> float:
+    """The smallest distance of ``points`` [N, 3] to the line through ``pivot`` along the unit ``axis``."""
+    rel = points - pivot
+    return float(np.min(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
 
 
 def _pieces_nu(structure: Structure, sim: SimModel) -> dict[int, list[np.ndarray]]:

@@ -31,6 +31,7 @@ import trimesh
 from jax3dc.physics.findings import Verdict
 from jax3dc.physics.guides import welded
 from jax3dc.physics.tolerances import ATTACH_TOL_NU
+from jax3dc.physics.verdict import line_distance, surface_points
 from jax3dc.structure import Box, Joint, Structure, canonicalize, parse_structure, to_json
 from jax3dc.structure.serialize import joint_to_dict
 from jax3dc.verify.verdicts import Physics, VerdictCache
@@ -45,7 +46,6 @@ ALL_KINDS = frozenset({FLIPPED, PIVOT, SWAPPED})
 # flagged), so by default only pivots move.
 DEFAULT_KINDS = frozenset({PIVOT})
 MIN_LEVER_NU = 1e-3  # a joint line closer than this to the child's centre has no lever
-_LINE_SAMPLES = 4000  # surface points per mesh for line distances (as the verdict's pivot check)
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,7 @@ def alternatives(structure: Structure, parts: dict[int, trimesh.Trimesh], boxes:
     if _mirrored(joint) != joint:
         out.append((FLIPPED, _mirrored(joint)))
     if joint.type == "hinge":
-        holder = np.concatenate([_surface(parts[p]) for p in sorted(welded(structure, structure.nodes[part].parent))])
+        holder = np.concatenate([surface_points(parts[p]) for p in sorted(welded(structure, structure.nodes[part].parent))])
         for pivot in pivot_lines(joint, parts[part], holder):
             moved = replace(joint, pivot=tuple(float(v) for v in pivot))
             out += [(PIVOT, moved), (f"{PIVOT}, {FLIPPED}", _mirrored(moved))]
@@ -130,7 +130,7 @@ def pivot_lines(joint: Joint, child: trimesh.Trimesh, holder: np.ndarray) -> lis
     lo, hi = flat.min(axis=0), flat.max(axis=0)
     spots = [np.array([u, v]) for u in (lo[0], hi[0]) for v in (lo[1], hi[1])] + [(lo + hi) / 2]
     lines = [pivot + spot @ across for spot in spots]
-    touching = [p for p in lines if _line_distance(holder, p, axis) <= ATTACH_TOL_NU]
+    touching = [p for p in lines if line_distance(holder, p, axis) <= ATTACH_TOL_NU]
     return sorted(touching, key=lambda p: float(np.linalg.norm((p - pivot) @ across.T)))
 
 
@@ -141,7 +141,7 @@ def _mirrored(joint: Joint) -> Joint:
 
 def _swapped(joint: Joint, centre: np.ndarray) -> Joint | None:
     axis = _unit(joint.axis)
-    lever = _line_distance(centre[None], np.asarray(joint.pivot, dtype=np.float64), axis)
+    lever = line_distance(centre[None], np.asarray(joint.pivot, dtype=np.float64), axis)
     if lever < MIN_LEVER_NU:
         return None
     lo, hi = joint.range
@@ -162,18 +162,6 @@ def _across(axis: np.ndarray) -> np.ndarray:
     u = e - (e @ axis) * axis
     u /= np.linalg.norm(u)
     return np.stack([u, np.cross(axis, u)])
-
-
-def _surface(mesh: trimesh.Trimesh) -> np.ndarray:
-    points = np.asarray(mesh.vertices, dtype=np.float64)
-    if len(mesh.faces):
-        points = np.concatenate([points, mesh.sample(_LINE_SAMPLES, seed=0)])
-    return points
-
-
-def _line_distance(points: np.ndarray, pivot: np.ndarray, axis: np.ndarray) -> float:
-    rel = points - pivot
-    return float(np.min(np.linalg.norm(rel - np.outer(rel @ axis, axis), axis=1)))
 
 
 def _written(structure: Structure, boxes: Mapping[int, Box]) -> Structure:
