@@ -147,7 +147,7 @@ def travel_contacts(model: SimulationMJCF) -> frozenset[tuple[int, int]]:
     touching(compiled.qpos0)
     for j in range(compiled.njnt):  # the structure's hinges and slides (the model has no free joint)
         lo, hi = compiled.jnt_range[j]
-        travel = (hi - lo) * (_reach(compiled, data, j) if int(compiled.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE) else 1.0)
+        travel = (hi - lo) * (hinge_reach(compiled, data, j) if int(compiled.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE) else 1.0)
         for value in np.linspace(lo, hi, min(MAX_SWEEP_SAMPLES, max(2, int(np.ceil(travel / MIN_PIECE_M)) + 1))):
             qpos = compiled.qpos0.copy()
             qpos[compiled.jnt_qposadr[j]] = value
@@ -177,8 +177,9 @@ def _object_bits(export: list[ExportPart]) -> dict[int, dict[str, str]]:
     return {pid: {"contype": str(bit[r]), "conaffinity": str(every & ~bit[r])} for pid, r in root_of.items()}
 
 
-def _reach(model: mujoco.MjModel, data: mujoco.MjData, j: int) -> float:
-    """Farthest distance (m) of a collision vertex that hinge ``j`` moves from its axis line, at rest."""
+def hinge_reach(model: mujoco.MjModel, data: mujoco.MjData, j: int) -> float:
+    """Farthest distance (m) of a collision vertex that hinge ``j`` moves from its axis line, at rest:
+    how far a turn of the hinge carries a point, so a sweep can be sampled densely enough."""
     data.qpos[:] = model.qpos0
     mujoco.mj_kinematics(model, data)
     anchor, axis = data.xanchor[j], data.xaxis[j]

@@ -16,6 +16,7 @@ import numpy as np
 import trimesh
 from scipy.spatial.transform import Rotation
 
+from jax3dc.export.simulation import hinge_reach
 from jax3dc.physics import cpu_backend
 from jax3dc.physics.findings import FAILURE, WARNING, Finding
 from jax3dc.physics.sim_model import SimModel, SimOptions, build_sim_model
@@ -88,7 +89,8 @@ def _near_piece_pairs(sim: SimModel, exclude: frozenset[tuple[int, int]]) -> fro
     found: set[tuple[int, int]] = set()
     for k, adr in enumerate(sim.joint_qpos):
         lo, hi = sim.joint_range[k]
-        travel = (hi - lo) * (_reach_radius(sim, k, data) if sim.joint_type[k] == "hinge" else 1.0)
+        joint = int(np.nonzero(model.jnt_qposadr == adr)[0][0])
+        travel = (hi - lo) * (hinge_reach(model, data, joint) if sim.joint_type[k] == "hinge" else 1.0)
         for value in np.linspace(lo, hi, max(2, int(np.ceil(travel / max(step_m, 1e-9))) + 1)):
             data.qpos[:] = model.qpos0
             data.qpos[adr] = value
@@ -103,23 +105,6 @@ def _near_piece_pairs(sim: SimModel, exclude: frozenset[tuple[int, int]]) -> fro
         names = sorted((mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g1), mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g2)))
         out.add((names[0], names[1]))
     return frozenset(out)
-
-
-def _reach_radius(sim: SimModel, k: int, data: mujoco.MjData) -> float:
-    """Farthest distance (m) of a vertex of the parts joint k moves from its axis line, at rest."""
-    model = sim.model
-    data.qpos[:] = model.qpos0
-    mujoco.mj_kinematics(model, data)
-    j = int(np.nonzero(model.jnt_qposadr == sim.joint_qpos[k])[0][0])
-    anchor, axis = data.xanchor[j], data.xaxis[j]
-    radius = 0.0
-    for g in np.nonzero(sim.moved_by[k][model.geom_bodyid])[0]:
-        if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_MESH:
-            continue
-        adr, n = model.mesh_vertadr[model.geom_dataid[g]], model.mesh_vertnum[model.geom_dataid[g]]
-        points = model.mesh_vert[adr:adr + n] @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g] - anchor
-        radius = max(radius, float(np.max(np.linalg.norm(points - np.outer(points @ axis, axis), axis=1))))
-    return radius
 
 
 def gravity(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, pieces,
