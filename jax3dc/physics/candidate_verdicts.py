@@ -6,7 +6,7 @@ part and frame (``convex_pieces``' caches: a candidate that moves no part's fram
 nothing). Each structure's kinematic model, check states and C proximity are built on the CPU as
 ``verdict.verdict_with_curves`` builds them; the penetration depths of every structure's states
 then come from one ``mjx_batch`` launch over the same models read without their detachment margin
-(no second model is built), padded to at least ``START_SHAPES`` and to the largest
+(no second model is built), padded to at least ``start_shapes()`` and to the largest
 shapes this process has met, so a run over many objects compiles only when a larger object comes.
 In a worker process of a device service (``mjx_service``, as ``physics sweep --backend mjx`` runs
 it) the structures go to the service instead, which launches the requests of all its workers together.
@@ -41,26 +41,19 @@ from collections.abc import Sequence
 import numpy as np
 import trimesh
 
-from jax3dc.physics import cpu_backend
+from jax3dc.physics import cpu_backend, launch_start
 from jax3dc.physics.findings import Verdict
 from jax3dc.physics.mjx_service import installed_client
 from jax3dc.physics.verdict import (CHECKS, DISTANCE_FREE_CHECKS, CheckRun, KinematicInputs, check_names, crossing_plan_of,
                                     kinematic_inputs, run_checks)
 from jax3dc.structure.schema import Structure
 
-# On an accelerator the first launch of a process is padded to these (the largest a device
-# service's batches of 16 factory candidates reached over 200 objects, narrow-phase capacity aside),
-# so that the shapes seldom grow; the narrow phase computes only the entries a launch holds, so its
-# capacity costs nothing. On a CPU padding costs compute in proportion (8 cabinet candidates: 2.7 s
-# of broad phase padded so, on 2 cores), so launches start at the size classes they need and grow.
-START_SHAPES = dict(objects=16, bodies=32, geoms=192, pairs=6144, nq=32, items=2048, hulls=(128, 1536),
-                    hull_sizes=((8, 12, 24), (32, 64, 96)), capacity=65536)
-
-
 def start_shapes() -> dict:
     """What a process's first candidate launch is padded to on this platform (``mjx_batch.Shapes``
-    fields; none on a CPU: the size classes the launch needs)."""
-    return {} if jax_on_cpu() else START_SHAPES
+    fields): ``launch_start.CANDIDATE_PENETRATION`` on an accelerator, so that the shapes seldom grow;
+    none on a CPU, where padding costs compute in proportion (8 cabinet candidates: 2.7 s of broad
+    phase padded so, on 2 cores), so launches start at the size classes they need and grow."""
+    return {} if jax_on_cpu() else launch_start.CANDIDATE_PENETRATION
 
 
 def device_crossings() -> bool:
@@ -155,7 +148,7 @@ def _submit(arrays: list, qpos: list[np.ndarray], plans: list | None, timings: d
     if service is not None:
         return service.submit(arrays, qpos, plans)
     # lazy: MJX and jax (0.46 s), for a launch in this process only
-    from jax3dc.physics.crossing_batch import CrossingShapes, START_SHAPES as CROSSING_START, batch_first_crossings
+    from jax3dc.physics.crossing_batch import CrossingShapes, batch_first_crossings
     from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances
 
     first = None
@@ -163,6 +156,6 @@ def _submit(arrays: list, qpos: list[np.ndarray], plans: list | None, timings: d
         at_least = _largest or Shapes(**start_shapes())
         distances, _largest = batch_pair_distances(arrays, qpos, at_least, timings)
         if plans is not None:
-            start = CrossingShapes() if jax_on_cpu() else CROSSING_START
-            first, _largest_crossings = batch_first_crossings(plans, _largest_crossings or start, timings)
+            least = CrossingShapes() if jax_on_cpu() else CrossingShapes(**launch_start.CROSSINGS)
+            first, _largest_crossings = batch_first_crossings(plans, _largest_crossings or least, timings)
     return lambda: (distances, first)

@@ -7,11 +7,11 @@ answered at once: each track's points are cut into chunks of ``CHUNK_POINTS`` (a
 is its own, so a query's first state is the earliest of its chunks'), an item is (chunk, track,
 board), and one function poses a chunk along its path and finds the first state at which a point
 passes through the board, the rule of ``crossing._first_crossing``. The tables are padded to
-capacities that only grow (from ``START_SHAPES`` on an accelerator: a run compiles once or twice,
-and a repeated one, its executables in the persistent cache, never), and the launch loops over the
-real items alone, ``ITEMS_PER_STEP`` at a time, so a large capacity costs no time; the states of a
-track are padded to a power of two from 32 (at most a few compiles), since every item poses all of
-them. Padded states and points are never seen on a side, so they cross nothing.
+capacities that only grow (from ``launch_start.CROSSINGS`` on an accelerator: a run compiles once or
+twice, and a repeated one, its executables in the persistent cache, never), and the launch loops
+over the real items alone, ``ITEMS_PER_STEP`` at a time, so a large capacity costs no time; the
+states of a track are padded to a power of two from 32 (at most a few compiles), since every item
+poses all of them. Padded states and points are never seen on a side, so they cross nothing.
 
 The launch runs in float32 (a board's coordinates are taken from its centre, so a point's error is
 ~1e-7 nu against margins of 0.05 nu); ``tests/physics/test_physics_crossing_batch.py`` checks its
@@ -54,11 +54,6 @@ class CrossingShapes:
         big = CrossingShapes(*(tuple(max(x, y) for x, y in zip(a, b)) if isinstance(a, tuple) else max(a, b)
                                for a, b in zip(dataclasses.astuple(self), dataclasses.astuple(other))))
         return dataclasses.replace(big, states=other.states)
-
-
-# On an accelerator the first crossing launch is padded to these (the candidate sets of a batch of
-# factory objects fit them), so that the capacities seldom grow
-START_SHAPES = CrossingShapes(items=32768, chunks=4096, tracks=1024, boards=2048, states=32, cells=(128, 128))
 
 
 def batch_first_crossings(plans: Sequence[CrossingPlan], at_least: CrossingShapes | None = None,

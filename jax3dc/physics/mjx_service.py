@@ -28,11 +28,7 @@ import mujoco
 import numpy as np
 
 from jax3dc.compilation import CompileClock
-
-# A sweep's first launch is padded to these (most batches of factory objects fit them: up to 26
-# bodies and 1,536 geom pairs an object), so that the shapes seldom grow and recompile.
-SWEEP_START_SHAPES = dict(objects=16, bodies=32, geoms=96, pairs=1536, nq=32, items=2048, hulls=(64, 384),
-                          hull_sizes=((8, 12, 12), (32, 64, 96)))
+from jax3dc.physics import launch_start
 
 
 @dataclass
@@ -61,9 +57,10 @@ class DeviceService:
     def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05,
                  start_shapes: dict | None = None, crossings: bool = False):
         """``start_shapes``: what the first launch is padded to (``mjx_batch.Shapes`` fields;
-        default SWEEP_START_SHAPES); ``crossings``: the workers send their candidate sets'
+        default ``launch_start.SWEEP_PENETRATION``; empty: the size classes each launch needs, as on
+        a CPU, for the crossing launches too); ``crossings``: the workers send their candidate sets'
         crossing queries here (on a CPU numpy answers them faster in the worker)."""
-        self.start_shapes = SWEEP_START_SHAPES if start_shapes is None else start_shapes
+        self.start_shapes = launch_start.SWEEP_PENETRATION if start_shapes is None else start_shapes
         self.crossings = crossings
         self.requests = context.Queue()
         self.replies = [context.Queue() for _ in range(workers)]
@@ -77,12 +74,13 @@ class DeviceService:
 
     def serve(self, stop: threading.Event) -> None:
         # lazy: MJX and jax (0.46 s); the CPU physics path imports this module (candidate_verdicts) and loads neither
-        from jax3dc.physics.crossing_batch import START_SHAPES, CrossingShapes
+        from jax3dc.physics.crossing_batch import CrossingShapes
         from jax3dc.physics.mjx_batch import Shapes
 
         clock = CompileClock()
         # the largest met so far: every launch is padded to it, so compiles happen only as it grows
-        shapes = [Shapes(**self.start_shapes), START_SHAPES if self.crossings and self.start_shapes else CrossingShapes()]
+        shapes = [Shapes(**self.start_shapes),
+                  CrossingShapes(**launch_start.CROSSINGS) if self.crossings and self.start_shapes else CrossingShapes()]
         self.stats.shapes = shapes[0]
         while not stop.is_set():
             try:
