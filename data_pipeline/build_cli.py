@@ -9,6 +9,7 @@ from pathlib import Path
 
 from data_pipeline.card import dataset_card
 from jax3dc.errors import InputFileError
+from jax3dc.processing.processor import MIN_IMAGE_SIDE
 
 SPLIT_CHOICES = ("hash", "train", "val", "test")  # data_pipeline.build.SPLIT_CHOICES (not imported: keeps --help fast)
 
@@ -78,6 +79,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                   description=BUILD_DESCRIPTION,
                                   formatter_class=argparse.RawDescriptionHelpFormatter)
     build.add_argument("--objects", type=int, required=True, help="number of factory objects (cycling categories)")
+    build.add_argument("--composed", type=int, default=0,
+                       help="number of objects composed from the real part meshes of --parts: bodies, doors, "
+                       "drawers, flaps and lids laid out anew, hinges on the edge away from the handle (default 0)")
+    build.add_argument("--parts", metavar="DIR", type=Path, default=None,
+                       help="part library for --composed: a folder of partnet_uv/<kind>/*.obj (cabinet_frames, "
+                       "doorLs, doorRs, drawers, handles, knobs), e.g. ../shared/real_parts")
     build.add_argument("--scenes", type=int, default=0,
                        help="number of multi-object scenes (furniture with items on top), each written at "
                        "part and object granularity (default 0)")
@@ -107,8 +114,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace, sources: list) -> int:
     from data_pipeline.build import BuildConfig, run_build  # lazy: array_record, factories (52 ms after `jax3dc --help`)
 
-    if args.views < 1 or args.workers < 1 or args.size < 16 or args.objects_per_shard < 1:
-        raise SystemExit("--views, --workers, --objects-per-shard must be >= 1 and --size >= 16")
+    if args.views < 1 or args.workers < 1 or args.size < MIN_IMAGE_SIDE or args.objects_per_shard < 1:
+        raise SystemExit(f"--views, --workers, --objects-per-shard must be >= 1 and --size >= {MIN_IMAGE_SIDE}")
     config = BuildConfig(views=args.views, seed=args.seed, size=args.size, objects_per_shard=args.objects_per_shard,
                          augment=args.augment, split=getattr(args, "split", "hash"),
                          appearance=args.appearance, mirror=args.mirror, palette_per_view=args.palette_per_view,
@@ -127,11 +134,20 @@ def _run(args: argparse.Namespace, sources: list) -> int:
 
 
 def run_build_command(args: argparse.Namespace) -> int:
-    from data_pipeline.build import factory_sources, scene_sources  # lazy: as in _run (52 ms)
+    from data_pipeline.build import composed_sources, factory_sources, part_library, scene_sources  # lazy: as in _run
 
-    if args.objects < 0 or args.scenes < 0 or args.objects + args.scenes < 1:
-        raise SystemExit("--objects and --scenes must be >= 0, and not both 0")
-    return _run(args, factory_sources(args.objects, args.seed) + scene_sources(args.scenes, args.seed))
+    if min(args.objects, args.scenes, args.composed) < 0 or args.objects + args.scenes + args.composed < 1:
+        raise SystemExit("--objects, --scenes and --composed must be >= 0, and not all 0")
+    composed = []
+    if args.composed:
+        if args.parts is None:
+            raise SystemExit("--composed needs --parts DIR (a part library, e.g. ../shared/real_parts)")
+        try:
+            part_library(str(args.parts.resolve()))
+        except FileNotFoundError as e:
+            raise InputFileError(args.parts, str(e)) from None
+        composed = composed_sources(args.composed, args.seed, args.parts)
+    return _run(args, factory_sources(args.objects, args.seed) + scene_sources(args.scenes, args.seed) + composed)
 
 
 def run_import_command(args: argparse.Namespace) -> int:

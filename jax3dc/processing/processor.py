@@ -30,6 +30,10 @@ from jax3dc.errors import InputFileError
 ImageLike = Union[str, os.PathLike, Image.Image, np.ndarray]
 
 MAX_ASPECT_RATIO = 200  # HF rejects images more elongated than this
+MIN_IMAGE_SIDE = 32
+"""px: the shortest image side the project reads or renders, one merged vision token of the models
+(16 px patches, 2 x 2 merged): ``predict``'s image check, the stage-1 network's reader and
+``data build --size`` hold to it, so a render the build writes is one that ``predict`` accepts."""
 
 
 @dataclass(frozen=True)

@@ -11,8 +11,8 @@ import numpy as np
 from PIL import Image
 
 from jax3dc.errors import Jax3dcError
+from jax3dc.processing.processor import MIN_IMAGE_SIDE
 
-MIN_SIDE = 16
 MIN_SPREAD = 2.0  # pixel standard deviation (0..255) below which an image shows nothing to read
 
 
@@ -21,7 +21,7 @@ class ImageInputError(Jax3dcError):
 
 
 def check_image(image: object) -> np.ndarray:
-    """``image`` if it is an RGB uint8 array of at least MIN_SIDE px a side that is not one flat
+    """``image`` if it is an RGB uint8 array of at least MIN_IMAGE_SIDE px a side that is not one flat
     colour (a blank image has no object to read); else ImageInputError."""
     if not isinstance(image, np.ndarray):
         raise ImageInputError(f"stage-1 image: expected a numpy array, got {type(image).__name__}")
@@ -29,9 +29,9 @@ def check_image(image: object) -> np.ndarray:
         raise ImageInputError(f"stage-1 image: expected shape (height, width, 3) RGB, got {image.shape}")
     if image.dtype != np.uint8:
         raise ImageInputError(f"stage-1 image: expected uint8 pixels, got {image.dtype}")
-    if min(image.shape[:2]) < MIN_SIDE:
+    if min(image.shape[:2]) < MIN_IMAGE_SIDE:
         raise ImageInputError(f"stage-1 image: {image.shape[1]}x{image.shape[0]} px is too small "
-                              f"(at least {MIN_SIDE} px a side)")
+                              f"(at least {MIN_IMAGE_SIDE} px a side)")
     if float(image.std()) < MIN_SPREAD:
         raise ImageInputError("stage-1 image: one flat colour, no object to read")
     return image

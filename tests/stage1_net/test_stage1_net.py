@@ -13,6 +13,7 @@ from flax import nnx
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.errors import InputFileError
 from jax3dc.parameters import parse_parameters
+from jax3dc.processing.processor import MIN_IMAGE_SIDE
 from jax3dc.stage1_net import (
     MARKER, ImageInputError, OutputLayout, Stage1Net, Stage1NetConfig, decode_text, forward, load_network, load_reader,
     network_image, save_network, schemas_from_json, schemas_to_json,
@@ -85,7 +86,7 @@ def test_folder_round_trip_and_an_untrained_reader_always_answers(tmp_path):
     b = safetensors.numpy.load_file(str(tmp_path / "b" / "model.safetensors"))
     assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
     read = load_reader(tmp_path / "a")
-    for shape in [(32, 32, 3), (17, 300, 3), (480, 640, 3)]:
+    for shape in [(32, 32, 3), (MIN_IMAGE_SIDE, 300, 3), (480, 640, 3)]:  # the floor, elongated
         text = read(np.random.default_rng(1).integers(0, 256, shape, dtype=np.uint8))
         assert run_parameters(parse_parameters(text, SCHEMAS)).parts
 
@@ -120,6 +121,7 @@ def test_weights_of_another_shape_name_the_tensor(tmp_path):
     (np.zeros((32, 32, 4), np.uint8), "shape"),
     (np.zeros((32, 32, 3), np.float32), "uint8"),
     (np.zeros((8, 300, 3), np.uint8), "too small"),
+    (np.zeros((MIN_IMAGE_SIDE - 1, 300, 3), np.uint8), "too small"),  # the floor predict's image check holds to
     ([[0, 0, 0]], "numpy array"),
     (np.full((64, 64, 3), 128, np.uint8), "no object"),
 ])
@@ -129,9 +131,9 @@ def test_an_unreadable_image_is_a_clear_error(image, problem):
 
 
 def test_a_non_square_image_is_padded_with_its_border_colour():
-    image = np.full((20, 40, 3), 200, np.uint8)
-    image[5:15, 15:25] = 10
-    out = network_image(image, 40)
-    assert out.shape == (40, 40, 3)
+    image = np.full((40, 80, 3), 200, np.uint8)
+    image[10:30, 30:50] = 10
+    out = network_image(image, 80)
+    assert out.shape == (80, 80, 3)
     assert np.allclose(out[0], 200 / 255) and np.allclose(out[-1], 200 / 255)
-    assert out[20, 20, 0] < 0.1
+    assert out[40, 40, 0] < 0.1
