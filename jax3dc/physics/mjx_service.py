@@ -1,6 +1,8 @@
-"""The accelerator's side of ``physics sweep --backend mjx``: worker processes prepare objects on
-the CPU and send their kinematic states here; the main process gathers the requests that arrive
-together into one ``mjx_batch`` launch and sends each worker its distances back.
+"""The accelerator's side of a pool of worker processes that check objects with MJX: ``physics
+sweep --backend mjx`` and verified decoding (``verify.pool``, each worker an object's candidates).
+The workers prepare objects on the CPU and send their kinematic states here; the main process
+gathers the requests that arrive together into one ``mjx_batch`` launch and sends each worker its
+distances back.
 
 The CPU work of a check (collision pieces, guides, rollouts) stays in the workers, so the
 accelerator is fed by every core while it runs the interpenetration sweep of many objects at once.
@@ -9,7 +11,7 @@ own when the service takes them (``crossings``: on an accelerator), answered by 
 ``crossing_batch`` launch over every such request of the batch. A batch is closed when
 ``batch_objects`` requests are in or ``wait_s`` has passed since the first; a failed launch is sent
 back to each of its workers as the error. Launches are padded to the largest shapes met so far
-(``mjx_batch.Shapes``), so the sweep compiles only when they grow.
+(``mjx_batch.Shapes``), so the launches compile only when they grow.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from jax3dc.physics import launch_start
 
 @dataclass
 class ServiceStats:
-    """What the device did over a sweep: launches, objects, and the XLA compiles among them."""
+    """What the device did over a run of the pool: launches, objects, and the XLA compiles among them."""
 
     launches: int = 0
     objects: int = 0
@@ -52,7 +54,8 @@ class ServiceStats:
 
 
 class DeviceService:
-    """Queues between sweep workers and the accelerator; ``serve`` runs in a thread of the main process."""
+    """Queues between a pool's workers (a sweep's, verified decoding's) and the accelerator; ``serve``
+    runs in a thread of the main process."""
 
     def __init__(self, context, workers: int, batch_objects: int = 16, wait_s: float = 0.05,
                  start_shapes: dict | None = None, crossings: bool = False):
