@@ -17,12 +17,14 @@ import json
 import multiprocessing
 import sys
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Callable
 
 from tqdm import tqdm
 
 from data_pipeline.augment import fuse_handles, merge_parts, split_part
+from data_pipeline.compose import PartLibrary, composed_source
 from data_pipeline.importers.object_ids import object_ids
 from data_pipeline.importers.source import import_object
 from data_pipeline.mirror import mirrored
@@ -35,8 +37,8 @@ from jax3dc.factories import FACTORIES, object_id
 
 @dataclass(frozen=True)
 class SourceSpec:
-    """How to make one object: ``kind`` "factory" (category, seed), "import" (path) or
-    "scene" (seed = build seed, category = scene index as text)."""
+    """How to make one object: ``kind`` "factory" (category, seed), "import" (path), "scene"
+    (seed = build seed, category = scene index as text) or "composed" (seed, path = part library)."""
 
     kind: str
     object_id: str
@@ -84,6 +86,20 @@ def scene_sources(m: int, seed: int) -> list[SourceSpec]:
     return [SourceSpec("scene", f"scene_{seed:06d}_{k:06d}", category=str(k), seed=seed) for k in range(m)]
 
 
+def composed_sources(n: int, seed: int, library: Path) -> list[SourceSpec]:
+    """``n`` objects composed from the part library at ``library`` (``data_pipeline.compose``);
+    object k has seed ``seed * 1_000_000 + k``, as factory objects do."""
+    path = str(Path(library).resolve())
+    return [SourceSpec("composed", f"composed_{seed:06d}_{k:06d}", seed=seed * 1_000_000 + k, path=path)
+            for k in range(n)]
+
+
+@lru_cache(maxsize=4)
+def part_library(path: str) -> PartLibrary:
+    """The library of ``path``, listed once per process (a build composes thousands of objects from it)."""
+    return PartLibrary.open(path)
+
+
 def import_sources(paths: list[Path]) -> list[SourceSpec]:
     """One spec per path; ids are unique in the import (see ``importers.object_ids``)."""
     ids = object_ids(paths)
@@ -111,6 +127,8 @@ def plan_shards(sources: list[SourceSpec], objects_per_shard: int, split: str = 
 def load_source(spec: SourceSpec) -> SourceObject:
     if spec.kind == "factory":
         return factory_source(spec.category, spec.seed)
+    if spec.kind == "composed":
+        return composed_source(spec.seed, part_library(spec.path), spec.object_id)
     obj = import_object(Path(spec.path))
     return SourceObject(str(obj.meta.get("category", "imported")), spec.object_id, obj.structure, obj.parts,
                         float(obj.meta.get("scale", 1.0)), warnings=tuple(obj.meta.get("warnings", ())))
