@@ -102,10 +102,10 @@ class Direction:
 
 @dataclass(frozen=True)
 class CrossingPlan:
-    """What ``crossings`` computes, as data: the tracks, the (track, board) queries whose first
-    crossing state decides it, and how those states become the answer (``resolve``). The queries
-    are the whole numeric cost, so a batched evaluator (``crossing_batch``) can answer those of
-    many plans at once."""
+    """A board-crossing check as data (``crossing_plan``): the tracks, the (track, board) queries
+    whose first crossing state decides it, and how those states become the answer (``resolve``).
+    The queries are the whole numeric cost: numpy answers them (``first_crossings``), or a batched
+    evaluator (``crossing_batch``) those of many plans at once."""
 
     tracks: tuple[Track, ...]
     queries: tuple[tuple[int, Board], ...]  # (index into tracks, board)
@@ -113,7 +113,10 @@ class CrossingPlan:
     sweeps: dict[int, np.ndarray]
 
     def resolve(self, first: Sequence[int | None]) -> dict[int, tuple[int, float]]:
-        """``crossings``' answer given each query's first crossing state (None: never)."""
+        """Per jointed part of the sweeps: (other part, joint value) of the first value of its sweep
+        (in the given order) by which the subtree its joint moves has passed through a board of
+        another part, or a board of the subtree through another part (absent: never), given each
+        query's first crossing state (None: never)."""
         reached: dict[int, dict[float, int]] = {}  # per part: the value at which each direction first crosses -> part
         for d in self.directions:
             crossed = [(first[q], n, p) for n, (q, p) in enumerate(d.hits) if first[q] is not None]
@@ -131,19 +134,6 @@ class CrossingPlan:
         return out
 
 
-def crossings(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: dict[int, np.ndarray],
-              pieces: dict[int, list[np.ndarray]] | None = None) -> dict[int, tuple[int, float]]:
-    """Per jointed part: (other part, joint value) of the first value of its sweep (in the given
-    order) by which the subtree its joint moves has passed through a board of another part, or a
-    board of the subtree through another part (absent: never). The path from rest to each value is followed in steps of at most
-    CROSSING_STEP_NU of point travel, so a part that goes round a board's edge is not crossing it.
-
-    ``pieces``: per part, the vertices (object frame, nu) of its convex collision pieces; the thin
-    ones are boards too (the walls of a bucket or carcass modelled as one closed mesh)."""
-    plan = crossing_plan(structure, parts, sweeps, pieces)
-    return plan.resolve(first_crossings(plan))
-
-
 def first_crossings(plan: CrossingPlan) -> list[int | None]:
     """Each query's first crossing state, in numpy (each track posed once)."""
     posed: dict[int, np.ndarray] = {}
@@ -157,8 +147,13 @@ def first_crossings(plan: CrossingPlan) -> list[int | None]:
 
 def crossing_plan(structure: Structure, parts: dict[int, trimesh.Trimesh], sweeps: dict[int, np.ndarray],
                   pieces: dict[int, list[np.ndarray]] | None = None) -> CrossingPlan:
-    """The tracks and queries of ``crossings`` (its arguments), boards and surfaces found (or read
-    from this process's cache) on the way."""
+    """The board-crossing check of ``sweeps`` (per jointed part, its joint values in the order they
+    are tried) as a plan, its boards and surfaces found (or read from this process's cache) on the
+    way. The path from rest to each value is followed in steps of at most CROSSING_STEP_NU of point
+    travel, so a part that goes round a board's edge is not crossing it.
+
+    ``pieces``: per part, the vertices (object frame, nu) of its convex collision pieces; the thin
+    ones are boards too (the walls of a bucket or carcass modelled as one closed mesh)."""
     boards = {p: _mesh_boards(mesh) + _cached_piece_boards((pieces or {}).get(p, [])) for p, mesh in parts.items()}
     surfaces = {p: _cached_surface(mesh) for p, mesh in parts.items()}
     tracks: list[Track] = []

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from jax3dc.physics.crossing import _mesh_boards, _path, crossings
+from crossing_cases import crossings
+from jax3dc.physics.crossing import _mesh_boards, _path
 from jax3dc.physics.kinematics import joint_motion
 from jax3dc.structure.schema import Joint, Node, Structure
 

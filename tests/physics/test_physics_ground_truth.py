@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from jax3dc.factories import generate_object
-from jax3dc.physics.crossing import crossings
+from crossing_cases import crossings
 from jax3dc.physics.findings import FAILURE, WARNING, Finding, describe
 from eval.verdict_accuracy.ground_truth import changes_motion, imported_objects
 from jax3dc.physics.kinematics import SAME_MOTION_TOL_NU, symmetric_about, sweep_distance

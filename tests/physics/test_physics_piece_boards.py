@@ -10,7 +10,8 @@ import numpy as np
 import trimesh
 
 from jax3dc.factories import generate_object
-from jax3dc.physics.crossing import _piece_boards, crossings
+from crossing_cases import crossings
+from jax3dc.physics.crossing import _piece_boards
 from eval.verdict_accuracy.ground_truth import imported_objects
 from eval.verdict_accuracy.mutations import mutations_of
 from jax3dc.physics.tolerances import CROSSING_MARGIN_NU
