@@ -148,6 +148,8 @@ def main() -> None:
     p.add_argument("--code-eval-records", type=int, default=100, help="procedural test records for the code task")
     p.add_argument("--compare", default="", help="an earlier release folder scored on the same records")
     p.add_argument("--fixtures", default="", help="shards of real objects never trained on, scored per object")
+    p.add_argument("--heldout-varied", default="", help="--heldout's objects in the varied look (bench.real_objects)")
+    p.add_argument("--fixtures-varied", default="", help="--fixtures' objects in the varied look")
     p.add_argument("--steps", type=int, default=6000)
     p.add_argument("--batch", type=int, default=32)
     p.add_argument("--seq-len", type=int, default=4096)
@@ -209,7 +211,10 @@ def main() -> None:
         _package(train_dir, release)
     bench = real_objects.main(["--model", str(release), *(["--compare", a.compare] if a.compare else []),
                                *(["--heldout", a.heldout] if a.heldout else []),
-                               *(["--fixtures", a.fixtures] if a.fixtures else []), "--procedural", str(data),
+                               *(["--fixtures", a.fixtures] if a.fixtures else []),
+                               *(["--heldout-varied", a.heldout_varied] if a.heldout_varied else []),
+                               *(["--fixtures-varied", a.fixtures_varied] if a.fixtures_varied else []),
+                               "--procedural", str(data),
                                "--out", str(out / "bench"), "--plain", str(a.eval_records),
                                "--batch", str(a.eval_batch), "--max-new-tokens", str(a.max_new_tokens)])
     code = None
