@@ -30,10 +30,10 @@ from eval.metrics.cases import build_cases, load_predictions
 from eval.metrics.programs import score_program, summarise
 from eval.metrics.tables import format_tables
 from eval.records import read_records, reference_of
-from jax3dc.cli_args import positive_int, positive_float
+from jax3dc.cli_args import positive_int
 from jax3dc.compilation import DEFAULT_DIR as DEFAULT_CACHE_DIR, use_compile_cache
+from jax3dc.decoding import DecodeOptions, add_decoding_arguments, decoding_from_args
 from jax3dc.errors import InputFileError, Jax3dcError
-from jax3dc.grounding import Grounding
 from jax3dc.release import default_structure_model
 from jax3dc.structure import boxes_to_dict, to_dict
 from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
@@ -63,7 +63,7 @@ def run_eval(args: argparse.Namespace) -> int:
         use_compile_cache(args.compile_cache)
     # lazy: `jax3dc --help` imports this module; the decoder costs it 37 ms more, the report (overlays,
     # viewers, the part rebuilder) 43 ms
-    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
+    from jax3dc.sampler import Sampler, generate_predictions
     from eval.report import write_report
 
     sources = [args.predictions is not None, args.reference_as_prediction, args.checkpoint is not None]
@@ -106,22 +106,20 @@ def run_eval(args: argparse.Namespace) -> int:
     elif args.reference_as_prediction:
         preds, name = {r.key: r.target for r in records}, "reference"
     else:
-        generator = Sampler.load(args.checkpoint, dtype=args.dtype)
-        options = DecodeOptions(constrained=not args.unconstrained, candidates=args.candidates,
-                                temperature=args.temperature, top_p=args.top_p, seed=args.seed,
-                                grounding=Grounding() if args.ground_joints else None,
-                                scene_grouping=args.scene_grouping)
+        decoding = decoding_from_args(args)
+        options = decoding.options
+        generator = Sampler.load(args.checkpoint, dtype=decoding.dtype)
         lines, stats = generate_predictions(generator, records, out / "predictions.jsonl", args.batch_size,
-                                            args.max_new_tokens, args.bucket, options)
+                                            decoding.max_new_tokens, args.bucket, options)
         notes.append(("constrained" if options.constrained else "unconstrained") + f" decoding, {options.candidates} "
                      f"candidate(s) per object; " + stats.summary())
         print(notes[-1])
         preds = {key: line["text"] for key, line in lines.items()}
         name = Path(args.checkpoint).name
-        if args.candidates > 1 or args.repair:
+        if options.candidates > 1 or decoding.repair:
             from eval.run_verify import verify_predictions  # lazy: the verifier and its pool (76 ms)
 
-            preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, args.repair,
+            preds, verified = verify_predictions(records, lines, out / "verified.jsonl", args.workers, decoding.repair,
                                                  source_folders(args.sources), args.physics_backend)
             notes.append(verified.summary())
             print(notes[-1])
@@ -142,7 +140,7 @@ def run_eval(args: argparse.Namespace) -> int:
 
 def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     """The code task: programs from the checkpoint (or --predictions, or the records' own), scored."""
-    from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions  # lazy: as in run_eval (37 ms)
+    from jax3dc.sampler import Sampler, generate_predictions  # lazy: as in run_eval (37 ms)
 
     if args.candidates > 1 or args.repair:
         raise Jax3dcError("--candidates and --repair choose structures; the code task takes neither")
@@ -212,35 +210,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                      f"'{ALL_SPLITS}' scores every record of every shard")
     run.add_argument("--limit", type=int, default=0, help="evaluate only the first N records (0 = all)")
     run.add_argument("--batch-size", type=positive_int, default=8, help="rows generated together (default 8)")
-    run.add_argument("--max-new-tokens", type=positive_int, default=2048, help="generation stops here at the latest (default 2048)")
     run.add_argument("--bucket", type=positive_int, default=64,
                      help="prompt lengths are padded to a multiple of this, limiting recompiles (default 64)")
-    run.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"), help="parameter dtype (default bfloat16)")
     run.add_argument("--overlays", type=int, default=16, help="joint overlays for the first N records (default 16)")
     run.add_argument("--viewers", type=int, default=8,
                      help="interactive 3D viewers (viewers/<key>.html, linked from index.html) of the first N parsed "
                      "predictions, each with its physics verdict (about a second per object) (default 8)")
-    run.add_argument("--unconstrained", action="store_true",
-                     help="decode without the grammar (default: every structure parses against its legend, and with "
-                     "--task code every part program parses)")
-    run.add_argument("--candidates", type=positive_int, default=1,
-                     help="K: candidates per object from one batched decode, the first greedy, the rest sampled; "
-                     "K > 1 lets the physics verdict choose (C MuJoCo, --workers processes). Default 1")
-    run.add_argument("--repair", action="store_true",
-                     help="try alternatives for the winner's flagged joints (axis flipped, pivot where child meets "
-                     "parent, hinge/slide) and keep one only when the verdict improves; listed in verified.jsonl")
-    run.add_argument("--ground-joints", action="store_true",
-                     help="correct each decoded joint's type, axis and hinge line with the part boxes of the legend "
-                     "(jax3dc.grounding; off by default: on the release-3 benchmark it did not raise held-out real success, "
-                     "see docs/runs/grounding_20261128)")
-    run.add_argument("--scene-grouping", action=argparse.BooleanOptionalAction, default=True,
-                     help="in a scene (the model wrote several trees, the legend shows two bodies on the floor, or "
-                     "the model wrote a support relation between two objects), cut each parent edge the legend boxes "
-                     "show to join two separate objects, and hang a piece left without its parent from its own object "
-                     "(jax3dc.structure.scene_grouping; default: on)")
-    run.add_argument("--temperature", type=positive_float, default=0.8, help="sampling temperature of candidates 2..K (default 0.8)")
-    run.add_argument("--top-p", type=positive_float, default=0.95, help="nucleus of candidates 2..K (default 0.95)")
-    run.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    add_decoding_arguments(run, "verified.jsonl", "verified.jsonl")
     run.add_argument("--workers", type=positive_int, default=max(1, (os.cpu_count() or 1)),
                      help="processes for the physics verdicts (default: one per core)")
     run.add_argument("--physics-backend", choices=("c", "mjx"), default="c",

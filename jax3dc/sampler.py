@@ -7,8 +7,9 @@ recompiles) and run through a jitted prefill + the jitted decode loop of ``jax3d
 prefill passes ``vision_window`` = the largest image's patch count so each image attends only to
 itself (full packed attention over a whole batch of images runs out of memory).
 
-Decoding follows ``DecodeOptions``: structures under the structure grammar and part programs under
-the part-program grammar (``jax3dc.constrained``) unless ``constrained`` is off, and with
+Decoding follows ``DecodeOptions`` (``jax3dc.decoding``, beside the commands' decoding flags):
+structures under the structure grammar and part programs under the part-program grammar
+(``jax3dc.constrained``) unless ``constrained`` is off, and with
 ``candidates`` K > 1 each prompt's prompt pass is repeated into K rows: the first greedy, the
 others sampled (temperature, top-p), all in one batched decode.
 
@@ -34,9 +35,10 @@ from PIL import Image
 from tqdm import tqdm
 
 from jax3dc.constrained import parameters_constraint, program_constraint, structure_constraint
+from jax3dc.decoding import DecodeOptions
 from jax3dc.errors import InputFileError
 from jax3dc.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
-from jax3dc.grounding import Grounding, ground_text
+from jax3dc.grounding import ground_text
 from jax3dc.model.params import load_pretrained
 from jax3dc.processing.chat import encode_chat
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images, smart_resize
@@ -77,30 +79,6 @@ def read_predictions_file(path: Path) -> dict[str, dict[str, Any]]:
     if torn:
         path.write_text("".join(json.dumps(v, separators=(",", ":")) + "\n" for v in done.values()), encoding="utf-8")
     return done
-
-
-@dataclass(frozen=True)
-class DecodeOptions:
-    """How predictions are decoded (see the module docstring)."""
-
-    constrained: bool = True
-    candidates: int = 1
-    temperature: float = 0.8  # for the sampled candidates
-    top_p: float = 0.95
-    seed: int = 0
-    # Structures: a parent edge the legend boxes show to join two separate objects of a scene is cut
-    # (jax3dc.structure.scene_grouping); only where the output reads as a scene (several trees, two
-    # bodies on the floor, or a support relation between two objects).
-    scene_grouping: bool = True
-    # The parameters task's grammar is built from the factories' schemas (category -> Schema): the
-    # caller passes them (jax3dc.factories.registry.SCHEMAS).
-    schemas: Any = None
-    # Joints corrected by the legend boxes after decoding (jax3dc.grounding); None: as the model wrote them.
-    grounding: Grounding | None = None
-
-    def __post_init__(self):
-        if self.candidates < 1:
-            raise ValueError(f"candidates must be >= 1, got {self.candidates}")
 
 
 @dataclass(frozen=True)
