@@ -26,6 +26,7 @@ import argparse
 import json
 import os
 from collections import defaultdict
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
@@ -58,11 +59,17 @@ def kind_of(record: Record) -> str:
 
 
 def write_sets(sources: Mapping[str, Path], out: Path, caps: Mapping[str, int]) -> dict[str, Path]:
-    """OUT/sets/<source>_<kind>: the first ``caps[kind]`` test records of each source and kind."""
+    """OUT/sets/<source>_<kind>: the first ``caps[kind]`` test records of each source and kind. A
+    record whose key an earlier source already holds (the same object in another look) gets the
+    source's name after its key, so one `eval run` can score every set."""
     sets: dict[str, Path] = {}
+    seen: set[str] = set()
     for source, folder in sources.items():
         by_kind: dict[str, list[Record]] = defaultdict(list)
         for record in read_records(shard_paths([str(folder)], "test"), split="test"):
+            if record.key in seen:
+                record = replace(record, key=f"{record.key}/{source}")
+            seen.add(record.key)
             kind = kind_of(record)
             if len(by_kind[kind]) < caps[kind]:
                 by_kind[kind].append(record)

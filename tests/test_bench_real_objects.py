@@ -21,3 +21,20 @@ def test_breakdown_counts_reference_joints_and_matched_ones_apart():
                            "success_pct": pytest.approx(75.0), "ref_right_pct": pytest.approx(60.0)}
     assert out["laptop"]["success_pct"] is None and out["laptop"]["ref_right_pct"] == 0.0
     assert _right(out["door"]) == "3 of 5" and _right(None) == "-"
+
+
+def test_sets_of_one_object_in_two_looks_get_keys_of_their_own(tmp_path):
+    """The held-out objects in the plain and the varied look share record keys; their sets must not,
+    or one `eval run` over every set refuses them."""
+    from bench.real_objects import write_sets
+    from data_pipeline.build import BuildConfig, factory_sources, run_build
+    from eval.records import read_records
+    from data_pipeline.shards import shard_paths
+
+    for look in ("plain", "varied"):
+        run_build(tmp_path / look, factory_sources(1, 0), BuildConfig(1, 0, 32, 4, split="test", appearance=look),
+                  workers=1, progress=False)
+    sets = write_sets({"heldout": tmp_path / "plain", "heldout_varied": tmp_path / "varied"}, tmp_path / "out",
+                      {"plain": 10, "split": 10, "merge": 10, "scene": 10})
+    keys = {name: [r.key for r in read_records(shard_paths([str(f)], "test"))] for name, f in sets.items()}
+    assert keys["heldout_varied_plain"] == [k + "/heldout_varied" for k in keys["heldout_plain"]]
