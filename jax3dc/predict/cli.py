@@ -1,5 +1,6 @@
-"""`jax3dc predict IMAGE --out DIR [--stage1 parameters|code|mesh:FILE|parts:DIR] [--stage1-model DIR]
-[--code-model DIR] [--structure-model DIR]`."""
+"""`jax3dc predict IMAGE --out DIR [--stage1 BACKEND] [--stage1-model DIR] [--code-model DIR]
+[--structure-model DIR]`; the backends ``--stage1`` takes, and its help lists, are
+``jax3dc.predict.stage1.BACKENDS``."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from pathlib import Path
 from jax3dc.cli_args import positive_int
 from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.predict.segmentation import load_camera
+from jax3dc.predict.stage1 import BACKENDS, backend_help
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS
 from jax3dc.release import default_structure_model
 from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
@@ -16,18 +18,14 @@ from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
 DESCRIPTION = """\
 Predict the articulated structure of the object in IMAGE and write simulation-ready assets.
 
-Stage 1 gives one mesh per part: `--stage1 parameters` lets a stage-1 model (--stage1-model;
-default: the shipped one in jax3dc/release/stage1, when it exists) write an object category and
-its parameters from the image, run by that category's factory into parts; it is the default
---stage1 when a stage-1 model ships, so `jax3dc predict IMAGE --out DIR` needs nothing else.
-`--stage1 code` lets the code model (--code-model) write a part program from the image, run by
-the interpreter; `--stage1 mesh:FILE` reads a part-segmented mesh from any tool (a GLB with one
-node per part, or an OBJ with one group per part; parts named 1..K keep those ids, other names
-are numbered in natural name order); `--stage1 parts:DIR` takes ground-truth parts (a folder of
-<id>.obj, e.g. a dataset object's, to test stage 2 alone). The parts are centred with largest
-extent 1 (the normalised frame). The segmentation S is rendered from the image's camera
-(--camera), and the structure model (--structure-model) reads the image, S and the part legend
-and writes the structure.
+Stage 1 gives one mesh per part, from the backend --stage1 names (listed below). `parameters` lets
+a stage-1 model (--stage1-model; default: the shipped one in jax3dc/release/stage1, when it
+exists) write an object category and its parameters from the image, run by that category's
+factory into parts; it is the default --stage1 when a stage-1 model ships, so `jax3dc predict
+IMAGE --out DIR` needs nothing else. A mesh file's parts named 1..K keep those ids, other names
+are numbered in natural name order. The parts are centred with largest extent 1 (the normalised
+frame). The segmentation S is rendered from the image's camera (--camera), and the structure
+model (--structure-model) reads the image, S and the part legend and writes the structure.
 
 Outputs in --out: structure.json, image.png, seg.png, parts/, object.urdf, object.xml (MJCF: the
 model the physics check judges, its root free unless mounted),
@@ -72,12 +70,12 @@ def run(args: argparse.Namespace) -> int:
 
 def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("predict", help="image in, articulated simulation-ready object out",
-                              description=DESCRIPTION, formatter_class=argparse.RawDescriptionHelpFormatter)
+                              description=DESCRIPTION, epilog=f"stage-1 backends (--stage1):\n{backend_help()}",
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("image", help="the input image (PNG, JPEG, ...)")
-    p.add_argument("--stage1", metavar="parameters|code|mesh:FILE|parts:DIR",
-                   help="where the part meshes come from: `parameters` (a stage-1 model writes a factory's "
-                        "parameters; the default when a stage-1 model is given or ships), `code` (the code model), "
-                        "`mesh:FILE` (.glb/.gltf/.obj) or `parts:DIR` (a folder of <id>.obj)")
+    p.add_argument("--stage1", metavar="|".join(b.usage for b in BACKENDS.values()),
+                   help="where the part meshes come from: one of the stage-1 backends listed below (default: "
+                        "parameters when a stage-1 model is given or ships)")
     p.add_argument("--structure-model", metavar="DIR", default=str(default_structure_model()),
                    help="stage-2 checkpoint folder (config.json + safetensors; default: the shipped model in "
                         "jax3dc/release, see its MODEL_CARD.md)")

@@ -4,8 +4,9 @@ Steps, each writing its outputs into ``out`` as soon as they exist, so that a fa
 leaves every output made before it (and the report says what failed):
   1. image I (any image Pillow reads; transparency on white, as the model's processor does) -> image.png,
      and the palette of this image (seeded from its bytes);
-  2. stage 1: part meshes (a stage-1 model -> factory parameters -> the factory, code model -> part
-     program -> interpreter, a segmented mesh file, or a parts folder) -> parts/ (+ parameters.txt
+  2. stage 1: part meshes from the backend the config names (jax3dc.predict.stage1.BACKENDS: a
+     stage-1 model -> factory parameters -> the factory, code model -> part program -> interpreter,
+     a segmented mesh file, a parts folder, or one a caller registered) -> parts/ (+ parameters.txt
      and program.txt for the parameters backend, program.txt for the code backend) and the
      stage-2 prompt -> prompt.txt; the backends that read the image first refuse one with no
      object in it (jax3dc.predict.stage1.check_object_image);
@@ -34,6 +35,7 @@ import numpy as np
 from PIL import Image
 from tqdm import tqdm
 
+from jax3dc.decoding import DecodeOptions, Decoding
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.grounding import Grounding
@@ -41,15 +43,14 @@ from jax3dc.mounted import is_mounted
 from jax3dc.palette import object_palette
 from jax3dc.physics.findings import Verdict
 from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
-from jax3dc.predict.models import TextModel, code_model, structure_candidates, structure_model
+from jax3dc.predict.models import TextModel, structure_candidates, structure_model
 from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
 from jax3dc.predict.report import ReportInputs, write_report
 from jax3dc.predict.segmentation import default_camera, render_segmentation
-from jax3dc.predict.stage1 import (CODE, MESH, PARAMETERS, Reader, ReaderSettings, Stage1, check_object_image,
-                                   load_reader, parse_stage1, stage1_from_mesh, stage1_from_parameters,
-                                   stage1_from_parts_dir, stage1_from_program)
+from jax3dc.predict.stage1 import (Reader, Stage1, Stage1Backend, Stage1Config, Stage1Image, Stage1Settings,
+                                   check_object_image, parse_stage1)
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
-from jax3dc.prompt import CODE_PROMPT, build_prompt
+from jax3dc.prompt import build_prompt
 from jax3dc.render import Camera, png_bytes
 from jax3dc.sampler import Sampler
 from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
@@ -112,29 +113,6 @@ class Checkpoints:
         return self.loaded[key]
 
 
-def program_text(image_png: bytes, code_model_dir: str | Path | None, generate_program: TextModel | None,
-                 max_new_tokens: int, checkpoints: Checkpoints, constrained: bool = True) -> str:
-    """The code model's part program for image I (``image_png``; its prompt is jax3dc.prompt.CODE_PROMPT),
-    decoded under the part-program grammar unless ``constrained`` is off."""
-    if generate_program is None:
-        if code_model_dir is None:
-            raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
-        generate_program = code_model(checkpoints.get(code_model_dir), image_png, max_new_tokens, constrained)
-    return generate_program(CODE_PROMPT)
-
-
-def parameters_text(rgb: np.ndarray, model_dir: Path | None, read_parameters: Reader | None, max_new_tokens: int,
-                    checkpoints: Checkpoints, constrained: bool = True) -> str:
-    """The stage-1 model's parameter text for image I (RGB uint8), decoded under the parameter
-    grammar unless ``constrained`` is off (for a language model)."""
-    if read_parameters is None:
-        if model_dir is None:
-            raise InputFileError("--stage1-model", "--stage1 parameters needs a stage-1 model folder (--stage1-model "
-                                                   "DIR); none ships with this install")
-        read_parameters = load_reader(model_dir, ReaderSettings(checkpoints.get, max_new_tokens, constrained))
-    return read_parameters(rgb)
-
-
 class _Outputs:
     """The files of one prediction: each is written, recorded under its name and announced to the
     listener (the CLI prints them) as soon as it exists."""
@@ -194,17 +172,6 @@ def _repaired(structure: Structure, parts: dict, boxes: dict, check: VerdictCach
 
 
 @dataclass(frozen=True)
-class _Stage1Settings:
-    """predict's arguments for the stage-1 backends that read the image (see predict)."""
-
-    code_model_dir: str | Path | None
-    generate_program: TextModel | None
-    read_parameters: Reader | None
-    max_new_tokens: int
-    constrained: bool
-
-
-@dataclass(frozen=True)
 class _StructureSettings:
     """predict's arguments for stage 2 (see predict)."""
 
@@ -219,10 +186,10 @@ class _StructureSettings:
     grounding: Grounding | None = None
 
 
-def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, given: _Stage1Settings, mesh_up: str,
-            checkpoints: Checkpoints, outputs: _Outputs, max_image_pixels: int) -> tuple[Image.Image, bytes, str, Stage1]:
-    """I (image.png) and the part meshes (parts/; parameters.txt and program.txt for the parameters
-    backend, program.txt for the code backend): (I in RGB, its PNG bytes, the sha256 of the input, the parts)."""
+def _stage1(image: str | Path | Image.Image, backend: Stage1Backend, settings: Stage1Settings,
+            outputs: _Outputs, max_image_pixels: int) -> tuple[Image.Image, bytes, str, Stage1]:
+    """I (image.png) and the part meshes of ``backend`` (with the files it writes): (I in RGB, its
+    PNG bytes, the sha256 of the input, the parts)."""
     rgb, digest = _image_and_digest(image, max_image_pixels)
     pixels = np.asarray(rgb)
     image_png = png_bytes(pixels)  # I as the models saw it (RGB): the viewer shows it
@@ -231,24 +198,10 @@ def _stage1(image: str | Path | Image.Image, backend: str, source: Path | None, 
         outputs.wrote("image", target)  # never written over the input itself
     else:
         outputs.binary("image", "image.png", image_png)
-    if backend in (PARAMETERS, CODE):
-        check_object_image(pixels, str(image) if isinstance(image, (str, Path)) else "the input image")
-    if backend == PARAMETERS:
-        text = parameters_text(pixels, source, given.read_parameters, given.max_new_tokens, checkpoints,
-                               given.constrained)
-        outputs.text("parameters", "parameters.txt", text)  # kept even when it fails to run
-        parts_in = stage1_from_parameters(text)
-        outputs.text("program", "program.txt", parts_in.program)
-    elif backend == CODE:
-        program = program_text(image_png, given.code_model_dir, given.generate_program, given.max_new_tokens,
-                                checkpoints, given.constrained)
-        outputs.text("program", "program.txt", program)  # kept even when it fails to run
-        parts_in = stage1_from_program(program)
-    elif backend == MESH:
-        parts_in = stage1_from_mesh(source, mesh_up)
-    else:
-        parts_in = stage1_from_parts_dir(source)
-    return rgb, image_png, digest, parts_in
+    seen = Stage1Image(pixels, image_png, str(image) if isinstance(image, (str, Path)) else "the input image")
+    if backend.reads_image:
+        check_object_image(seen.rgb, seen.where)
+    return rgb, image_png, digest, backend.run(seen, settings)
 
 
 def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict, settings: _StructureSettings,
@@ -259,7 +212,7 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
     the choice, the repair and physics.json)."""
     progress.step("structure model")
     parts_in = result.stage1
-    metres = settings.scale if settings.scale is not None else (1.0 if parts_in.source == CODE else parts_in.scale)
+    metres = settings.scale if settings.scale is not None else parts_in.metres()
     check = VerdictCache(Physics(parts_in.parts, metres, settings.mounted))
     generate = settings.generate
     structure = None
@@ -308,7 +261,8 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
             checkpoints: Checkpoints | None = None, num_joints: int | None = None) -> PredictResult:
     """Runs both stages on ``image`` and writes every output into ``out``.
 
-    ``stage1``: "parameters", "code", "mesh:FILE" or "parts:DIR" (see jax3dc.predict.stage1); None:
+    ``stage1``: a backend of jax3dc.predict.stage1.BACKENDS, ``NAME`` or ``NAME:ARG`` ("parameters",
+    "code", "mesh:FILE", "parts:DIR" or one registered); None:
     "parameters" when a stage-1 model is given or ships, else an InputFileError naming what to pass.
     ``structure_model_dir`` / ``code_model_dir``: checkpoint folders (``jax3dc.sampler.Sampler.load``);
     ``stage1_model_dir``: the parameters backend's model folder (jax3dc.predict.stage1.load_reader; default:
@@ -340,18 +294,20 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
     Raises a Jax3dcError subclass on bad input, after writing every output it could.
     """
     out = Path(out)
-    backend, source = parse_stage1(stage1, stage1_model_dir)  # a bad --stage1 is refused before anything is written
+    backend, argument = parse_stage1(stage1, stage1_model_dir)  # a bad --stage1 is refused before anything is written
     out.mkdir(parents=True, exist_ok=True)
     outputs = _Outputs(out, on_output)
     checkpoints = checkpoints if checkpoints is not None else Checkpoints(dtype)
     steps = _Progress(progress)
-    stage1_settings = _Stage1Settings(code_model_dir, generate_program, read_parameters, max_new_tokens, constrained)
+    stage1_settings = Stage1Settings(Stage1Config(stage1, stage1_model_dir, code_model_dir, mesh_up, read_parameters,
+                                                  generate_program), argument,
+                                     Decoding(DecodeOptions(constrained=constrained), max_new_tokens, dtype),
+                                     checkpoints.get, outputs.text)
     settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
                                   repair, scale, mounted, Grounding() if ground_joints else None)
     try:
         steps.step("stage 1")
-        rgb, image_png, digest, parts_in = _stage1(image, backend, source, stage1_settings, mesh_up, checkpoints,
-                                                   outputs, max_image_pixels)
+        rgb, image_png, digest, parts_in = _stage1(image, backend, stage1_settings, outputs, max_image_pixels)
         palette = object_palette(PALETTE_CATEGORY, digest)
         if settings.mounted is None:
             settings = replace(settings, mounted=is_mounted(parts_in.category))

@@ -1,6 +1,8 @@
 """Stage 1 (f_geo) at inference: one triangle mesh per part, in the normalised frame (SPEC §1).
 
-Backends:
+Where the parts come from is a backend, chosen by name (``--stage1 NAME`` or ``NAME:ARG``) from
+``BACKENDS``: each is a callable ``(Stage1Image, Stage1Settings) -> Stage1``, so a model that
+writes parts directly plugs in with ``register_backend`` beside the four built in:
 * ``parameters``: a stage-1 model reads the image and writes a factory's category and parameters
   (``jax3dc.parameters``, one line); the factory runs them into parts with ids 1..N, semantic
   names and a metric scale (``jax3dc.factories.run_parameters``). The default when a stage-1 model
@@ -13,43 +15,50 @@ Backends:
   ``jax3dc.geometry.parts`` writes it (a dataset object's parts, or a previous prediction's
   ``parts/``): stage 2 alone, for evaluation.
 
-The two backends that read the image first refuse one that cannot hold an object
+A backend that reads the image (``reads_image``) is handed only an image that can hold an object
 (``check_object_image``): a model asked about a blank or a noise image still answers (its grammar
 makes sure the answer runs), so the object it invents would go all the way to the exports.
 
 Either way the parts are centred with largest extent 1 (``normalise_parts``; a factory's already
 are); the factor is kept as the scale (mesh: file units per nu, metres for a mesh in metres;
 parameters: metres per nu).
+
+`jax3dc --help` imports this module to list the backends, so the models (jax, 1.5 s) are imported
+only when a backend loads one.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 import trimesh
 from PIL import Image
 from scipy.ndimage import maximum_filter, minimum_filter
 
+from jax3dc.decoding import Decoding
 from jax3dc.errors import InputFileError, ProgramError
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import load_parts, normalise_parts, part_boxes
 from jax3dc.parameters import parse_parameters
 from jax3dc.predict.mesh_input import load_segmented_mesh
-from jax3dc.predict.models import parameters_model
 from jax3dc.program.interpreter import run_program
+from jax3dc.prompt import CODE_PROMPT
 from jax3dc.release import default_stage1_model
-from jax3dc.stage1_net import load_reader as load_image_network
 from jax3dc.structure import canonicalize
+
+if TYPE_CHECKING:
+    from jax3dc.predict.models import TextModel
 
 PARAMETERS = "parameters"
 CODE = "code"
 MESH = "mesh"
 PARTS = "parts"
-CHOICES = ("`parameters` (a stage-1 model, --stage1-model DIR), `code` (a code model, --code-model DIR), `mesh:FILE` "
-           "(a GLB with one node per part, or an OBJ with groups) or `parts:DIR` (a folder of <id>.obj part meshes)")
+
+Reader = Callable[[np.ndarray], str]
+"""RGB uint8 image (H, W, 3) -> the one-line parameter text, e.g. ``stapler(length=0.31, ...)``."""
 
 
 @dataclass(frozen=True)
@@ -63,27 +72,114 @@ class Stage1:
     program: str | None = None
     category: str | None = None  # the factory's, for the parameters backend (it decides whether the object is mounted)
     joints: int | None = None  # the factory's object's joint count, for the parameters backend (the prompt's Joints: line)
+    metres_per_nu: float | None = None  # when ``scale`` is not in metres (a part program's units are nu: 1.0)
+
+    def metres(self) -> float:
+        """Metres per nu of the exports and the physics check when the caller names none: the
+        source's units are taken as metres unless the backend knows better."""
+        return self.scale if self.metres_per_nu is None else self.metres_per_nu
 
 
-def parse_stage1(spec: str | None, stage1_model: str | Path | None = None) -> tuple[str, Path | None]:
-    """``parameters`` -> ("parameters", the stage-1 model folder: ``stage1_model``, else the shipped
-    one, else None); ``code`` -> ("code", None); ``mesh:FILE`` -> ("mesh", FILE); ``parts:DIR`` ->
-    ("parts", DIR). No spec means ``parameters`` when a stage-1 model is given or ships; otherwise,
-    and for anything else, an InputFileError naming what to pass."""
+@dataclass(frozen=True)
+class Stage1Image:
+    """Image I as a backend reads it: RGB uint8 (H, W, 3), its PNG bytes (what the language models
+    are handed), and what an error about it names (the file, or "the input image")."""
+
+    rgb: np.ndarray
+    png: bytes
+    where: str
+
+
+@dataclass(frozen=True)
+class Stage1Config:
+    """The caller's choice of stage 1 (``PredictConfig.stage1``); each backend reads the fields it needs."""
+
+    backend: str | None = None  # NAME or NAME:ARG of BACKENDS; None: parameters when a stage-1 model is given or ships
+    model_dir: str | Path | None = None  # --stage1-model (the parameters backend's; default: the shipped one)
+    code_model_dir: str | Path | None = None  # --code-model
+    mesh_up: str = "z"  # the mesh file's up axis: "z" (ours, jax3dc's exports) or "y" (glTF's convention)
+    read_parameters: Reader | None = None  # stands in for the stage-1 model (tests; a caller's own model server)
+    generate_program: TextModel | None = None  # stands in for the code model: the code prompt -> a part program
+
+
+@dataclass(frozen=True)
+class Stage1Settings:
+    """What a backend gets besides the image. ``load_model`` loads a checkpoint folder once for the
+    whole prediction (stage 2 may name the same folder); ``write_text(name, filename, text)`` writes
+    an output into --out at once, so that it stays for inspection when a later step fails."""
+
+    config: Stage1Config
+    argument: str | None  # ARG of ``NAME:ARG`` (the mesh file, the parts folder); None for a backend that takes none
+    decoding: Decoding
+    load_model: Callable[[str | Path], Any]  # folder -> jax3dc.sampler.Sampler
+    write_text: Callable[[str, str, str], Path]
+
+
+Stage1Runner = Callable[[Stage1Image, Stage1Settings], Stage1]
+
+
+@dataclass(frozen=True)
+class Stage1Backend:
+    """One source of parts, as ``--stage1`` names it."""
+
+    name: str
+    summary: str  # its line in `jax3dc predict --help`
+    run: Stage1Runner
+    argument: str | None = None  # the metavar of ``NAME:ARG`` ("FILE"); None: the name alone
+    reads_image: bool = False  # refuse an image with no object in it before running (check_object_image)
+
+    @property
+    def usage(self) -> str:
+        return self.name if self.argument is None else f"{self.name}:{self.argument}"
+
+
+BACKENDS: dict[str, Stage1Backend] = {}
+"""Name -> backend, in the order `jax3dc predict --help` lists them."""
+
+
+def register_backend(backend: Stage1Backend) -> Stage1Backend:
+    """Adds ``backend`` to BACKENDS (before the parser is built, for `jax3dc predict --help` to list
+    it); a name already taken, or one with a colon, is a ValueError rather than a silent replacement."""
+    if not backend.name or ":" in backend.name:
+        raise ValueError(f"a stage-1 backend's name is a word without a colon, not {backend.name!r}")
+    if backend.name in BACKENDS:
+        raise ValueError(f"a stage-1 backend named {backend.name!r} exists already")
+    BACKENDS[backend.name] = backend
+    return backend
+
+
+def backend_choices() -> str:
+    """The backends' usages on one line, for error messages."""
+    usages = [f"`{b.usage}`" for b in BACKENDS.values()]
+    listed = usages[0] if len(usages) == 1 else f"{', '.join(usages[:-1])} or {usages[-1]}"
+    return f"{listed} (`jax3dc predict --help` says what each reads)"
+
+
+def backend_help() -> str:
+    """One line per backend (usage, then summary), for `jax3dc predict --help`."""
+    width = max(len(b.usage) for b in BACKENDS.values()) + 2
+    return "\n".join(f"  {b.usage:<{width}}{b.summary}" for b in BACKENDS.values())
+
+
+def parse_stage1(spec: str | None, model_dir: str | Path | None = None) -> tuple[Stage1Backend, str | None]:
+    """The backend ``spec`` names and its argument: ``NAME`` -> (backend, None), ``NAME:ARG`` ->
+    (backend, ARG) for a backend that takes one. No spec means ``parameters`` when a stage-1 model
+    is given (``model_dir``) or ships; otherwise, and for an unknown name or a missing or
+    unexpected argument, an InputFileError naming the choices."""
     if spec is None:
-        if stage1_model is None and default_stage1_model() is None:
-            raise InputFileError("--stage1", f"no stage-1 model ships with this install, so say where the parts come "
-                                             f"from: --stage1 {CHOICES}")
+        if model_dir is None and default_stage1_model() is None:
+            raise InputFileError("--stage1", "no stage-1 model ships with this install, so say where the parts come "
+                                             "from (--stage1-model DIR names a stage-1 model): "
+                                             f"--stage1 {backend_choices()}")
         spec = PARAMETERS
-    if spec == PARAMETERS:
-        folder = stage1_model if stage1_model is not None else default_stage1_model()
-        return PARAMETERS, None if folder is None else Path(folder)
-    if spec == CODE:
-        return CODE, None
-    kind, _, path = spec.partition(":")
-    if kind in (MESH, PARTS) and path:
-        return kind, Path(path)
-    raise InputFileError(spec, f"--stage1 must be {CHOICES}")
+    name, colon, argument = spec.partition(":")
+    backend = BACKENDS.get(name)
+    if backend is not None:
+        if backend.argument is None and not colon:
+            return backend, None
+        if backend.argument is not None and argument:
+            return backend, argument
+    raise InputFileError(spec, f"--stage1 must be {backend_choices()}")
 
 
 def _normalised(parts: dict[int, trimesh.Trimesh], where: str) -> tuple[dict[int, trimesh.Trimesh], float]:
@@ -184,10 +280,6 @@ def check_object_image(rgb: np.ndarray, where: str) -> None:
 # the language model's ``config.json``, the more specific marker first. Another kind of model plugs
 # in with one entry.
 
-Reader = Callable[[np.ndarray], str]
-"""RGB uint8 image (H, W, 3) -> the one-line parameter text, e.g. ``stapler(length=0.31, ...)``."""
-
-
 @dataclass(frozen=True)
 class ReaderSettings:
     """What a reader may need from predict: a loaded language model is shared with stage 2 when both
@@ -208,10 +300,14 @@ class ReaderKind:
 
 
 def _language_model(folder: Path, settings: ReaderSettings) -> Reader:
+    from jax3dc.predict.models import parameters_model  # lazy: jax and the grammars (1.5 s), see the module docstring
+
     return parameters_model(settings.sampler(folder), settings.max_new_tokens, settings.constrained)
 
 
 def _image_network(folder: Path, settings: ReaderSettings) -> Reader:
+    from jax3dc.stage1_net import load_reader as load_image_network  # lazy: jax (2 s), see the module docstring
+
     return load_image_network(folder)
 
 
@@ -234,3 +330,69 @@ def load_reader(folder: str | Path, settings: ReaderSettings) -> Reader:
             return kind.load(folder, settings)
     wanted = "; ".join(f"{kind.marker} ({kind.description})" for kind in READERS)
     raise InputFileError(folder, f"not a stage-1 model folder: it holds none of {wanted}")
+
+
+# The built-in backends, in the order of the module docstring.
+
+
+def _parameters_text(rgb: np.ndarray, settings: Stage1Settings) -> str:
+    """The stage-1 model's parameter text for image I (``read_parameters``, else the reader of the
+    model folder: --stage1-model, else the shipped one), decoded under the parameter grammar unless
+    the decoding is unconstrained (for a language model)."""
+    config, decoding = settings.config, settings.decoding
+    read = config.read_parameters
+    if read is None:
+        folder = config.model_dir if config.model_dir is not None else default_stage1_model()
+        if folder is None:
+            raise InputFileError("--stage1-model", "--stage1 parameters needs a stage-1 model folder (--stage1-model "
+                                                   "DIR); none ships with this install")
+        read = load_reader(folder, ReaderSettings(settings.load_model, decoding.max_new_tokens,
+                                                  decoding.options.constrained))
+    return read(rgb)
+
+
+def _program_text(png: bytes, settings: Stage1Settings) -> str:
+    """The code model's part program for image I (its prompt is jax3dc.prompt.CODE_PROMPT), decoded
+    under the part-program grammar unless the decoding is unconstrained."""
+    generate = settings.config.generate_program
+    if generate is None:
+        folder = settings.config.code_model_dir
+        if folder is None:
+            raise InputFileError("--code-model", "--stage1 code needs a code model checkpoint (--code-model DIR)")
+        from jax3dc.predict.models import code_model  # lazy: jax and the grammars (1.5 s), see the module docstring
+
+        decoding = settings.decoding
+        generate = code_model(settings.load_model(folder), png, decoding.max_new_tokens, decoding.options.constrained)
+    return generate(CODE_PROMPT)
+
+
+def _from_parameters(image: Stage1Image, settings: Stage1Settings) -> Stage1:
+    text = _parameters_text(image.rgb, settings)
+    settings.write_text("parameters", "parameters.txt", text)  # kept even when it fails to run
+    parts = stage1_from_parameters(text)
+    settings.write_text("program", "program.txt", parts.program)
+    return parts
+
+
+def _from_code(image: Stage1Image, settings: Stage1Settings) -> Stage1:
+    program = _program_text(image.png, settings)
+    settings.write_text("program", "program.txt", program)  # kept even when it fails to run
+    return stage1_from_program(program)
+
+
+def _from_mesh(image: Stage1Image, settings: Stage1Settings) -> Stage1:
+    return stage1_from_mesh(settings.argument, settings.config.mesh_up)
+
+
+def _from_parts_dir(image: Stage1Image, settings: Stage1Settings) -> Stage1:
+    return stage1_from_parts_dir(settings.argument)
+
+
+register_backend(Stage1Backend(PARAMETERS, "a stage-1 model (--stage1-model; default: the shipped one) writes a "
+                             "factory's parameters, run into parts", _from_parameters, reads_image=True))
+register_backend(Stage1Backend(CODE, "the code model (--code-model) writes a part program, run by the interpreter",
+                               _from_code, reads_image=True))
+register_backend(Stage1Backend(MESH, "a part-segmented mesh: a GLB with one node per part, or an OBJ with one group "
+                               "per part", _from_mesh, argument="FILE"))
+register_backend(Stage1Backend(PARTS, "ground-truth parts, a folder of <id>.obj: stage 2 alone", _from_parts_dir,
+                               argument="DIR"))

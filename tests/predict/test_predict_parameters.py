@@ -24,7 +24,7 @@ from jax3dc.geometry.parts import load_parts
 from jax3dc.parameters import ParameterError, format_parameters, parse_parameters
 from jax3dc.predict import predict
 from jax3dc.predict import stage1 as stage1_module
-from jax3dc.predict.stage1 import PARAMETERS, ReaderKind, check_object_image, parse_stage1
+from jax3dc.predict.stage1 import BACKENDS, PARAMETERS, ReaderKind, check_object_image, parse_stage1
 from predict_cases import CAMERA, write_image
 from tests.factory_samples import sample_parameters
 from tests.tiny_checkpoint import write_tiny_release_vocab_checkpoint
@@ -106,7 +106,7 @@ def test_parameters_backend_from_the_image(model, image, tmp_path):
 def test_default_stage1_is_the_shipped_model(image, tmp_path, monkeypatch):
     shipped = fake_net_folder(tmp_path / "stage1", monkeypatch, seen := [])
     monkeypatch.setattr(release, "STAGE1_DIR", shipped)
-    assert parse_stage1(None) == (PARAMETERS, shipped)
+    assert parse_stage1(None) == (BACKENDS[PARAMETERS], None)
     result = predict(image, out=tmp_path / "out", camera=CAMERA, generate_structure=rigid_star)
     assert seen[0] == shipped and result.stage1.source == PARAMETERS
     assert (tmp_path / "out" / "parameters.txt").read_text() == GOOD and (tmp_path / "out" / "object.xml").is_file()
