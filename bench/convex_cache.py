@@ -35,7 +35,8 @@ from PIL import Image  # noqa: E402
 from jax3dc.factories import generate_object  # noqa: E402
 from jax3dc.factories.registry import FACTORIES  # noqa: E402
 import jax3dc.geometry.convex_pieces as cp  # noqa: E402
-from jax3dc.predict import predict  # noqa: E402
+from jax3dc.predict import PredictConfig, predict  # noqa: E402
+from jax3dc.predict.stage1 import Stage1Config  # noqa: E402
 from jax3dc.cli import main as cli  # noqa: E402
 from jax3dc.geometry.parts import part_boxes, save_parts  # noqa: E402
 from jax3dc.structure import canonicalize, to_json  # noqa: E402
@@ -80,8 +81,9 @@ def _commands(category: str, seed: int, folder: Path) -> dict[str, Callable[[], 
         return run
 
     def run_predict() -> None:
-        predict(image, f"parts:{folder / 'parts'}", out=folder / "predict", generate_structure=lambda prompt: structure,
-                scale=obj.scale_m_per_nu, mounted=FACTORIES[category].mounted)
+        config = PredictConfig(Stage1Config(f"parts:{folder / 'parts'}"), generate_structure=lambda prompt: structure,
+                               scale=obj.scale_m_per_nu, mounted=FACTORIES[category].mounted)
+        predict(image, config, folder / "predict")
 
     return {"export mjcf": export("mjcf"), "export 3": export("urdf", "usd", "mjcf"), "predict": run_predict}
 

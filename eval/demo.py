@@ -38,6 +38,7 @@ from eval.metrics.cases import build_cases
 from eval.metrics.score import evaluate
 from eval.pixels import PixelsResult, predict_record, score_pixels
 from eval.records import read_records, reference_of
+from jax3dc.decoding import Decoding
 from jax3dc.errors import Jax3dcError
 from jax3dc.export.blender import export_blender
 from jax3dc.export.gltf import export_gltf
@@ -47,9 +48,9 @@ from jax3dc.factories import generate_object
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.parameters import parse_parameters
-from jax3dc.predict.pipeline import Checkpoints, predict
+from jax3dc.predict.pipeline import Checkpoints, PredictConfig, predict
 from jax3dc.predict.segmentation import camera_from_dict
-from jax3dc.predict.stage1 import ReaderSettings, load_reader
+from jax3dc.predict.stage1 import ReaderSettings, Stage1Config, load_reader
 from jax3dc.release import default_stage1_model, default_structure_model
 from jax3dc.structure import canonicalize, save_boxes, to_dict, to_json
 from train import cli as train_cli
@@ -111,9 +112,11 @@ def _predict_one(record, joints: int, out: Path, checkpoints: Checkpoints) -> tu
     (out / "input.png").write_bytes(record.image_png)
     save_parts(obj.parts, out / "input_parts")
     try:
-        result = predict(out / "input.png", f"parts:{out / 'input_parts'}", default_structure_model(), out=out / "asset",
-                         camera=camera_from_dict(record.meta["camera"], "record camera"), max_new_tokens=1024,
-                         checkpoints=checkpoints, num_joints=joints or None)
+        config = PredictConfig(Stage1Config(f"parts:{out / 'input_parts'}"), default_structure_model(),
+                               decoding=Decoding(max_new_tokens=1024),
+                               camera=camera_from_dict(record.meta["camera"], "record camera"),
+                               num_joints=joints or None)
+        result = predict(out / "input.png", config, out / "asset", checkpoints=checkpoints)
     except Jax3dcError as e:  # keep what was written, say why
         written = sorted(p.name for p in (out / "asset").iterdir()) if (out / "asset").is_dir() else []
         return {"key": record.key, "status": "partial", "out": str(out / "asset"), "reason": str(e),

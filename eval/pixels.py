@@ -24,11 +24,12 @@ from eval.metrics.parameters import ParametersScore, score_parameters
 from eval.metrics.part_matching import box_bounds, match_bounds
 from eval.metrics.relabel import relabel
 from eval.metrics.score import Evaluation, evaluate
+from jax3dc.decoding import Decoding
 from jax3dc.errors import Jax3dcError
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import part_boxes
-from jax3dc.predict.pipeline import Checkpoints, predict
-from jax3dc.predict.stage1 import Reader
+from jax3dc.predict.pipeline import Checkpoints, PredictConfig, predict
+from jax3dc.predict.stage1 import Reader, Stage1Config
 from jax3dc.release import default_structure_model
 from jax3dc.structure import to_dict
 
@@ -58,8 +59,9 @@ def predict_record(record: Record, reference: Reference, out: Path, read_paramet
     image through ``read_parameters``), into ``out``, then matched to ``reference``."""
     started = time.perf_counter()
     try:
-        result = predict(Image.open(io.BytesIO(record.image_png)), None, default_structure_model(), out=out, read_parameters=read_parameters,
-                         max_new_tokens=max_new_tokens, checkpoints=checkpoints)
+        config = PredictConfig(Stage1Config(read_parameters=read_parameters), default_structure_model(),
+                               decoding=Decoding(max_new_tokens=max_new_tokens))
+        result = predict(Image.open(io.BytesIO(record.image_png)), config, out, checkpoints=checkpoints)
     except Jax3dcError as e:
         return PixelsResult(record.key, None, 0, 0, len(reference.boxes), None, time.perf_counter() - started,
                             str(e))

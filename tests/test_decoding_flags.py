@@ -1,5 +1,6 @@
-"""The decoding flags are declared once (jax3dc.decoding): `jax3dc eval run` takes them, their
-defaults are the dataclasses', and the help of ``--repair`` says what the default repair kinds try."""
+"""The decoding flags are declared once (jax3dc.decoding): `jax3dc predict` and `jax3dc eval run`
+take the same ones with the same defaults, their defaults are the dataclasses', and the help of
+``--repair`` says what the default repair kinds try."""
 
 from __future__ import annotations
 
@@ -23,12 +24,13 @@ def _flags(parser: argparse.ArgumentParser) -> dict[str, tuple]:
     return {action.dest: (tuple(action.option_strings), action.default) for action in parser._actions}
 
 
-def test_eval_run_takes_the_declared_decoding_flags():
+def test_predict_and_eval_run_take_the_same_decoding_flags():
     commands = build_parser(["eval"])._subparsers._group_actions[0].choices
+    predict = _flags(commands["predict"])
     run = _flags(commands["eval"].subcommands.choices["run"])
     declared = _flags(_decoding_parser())
     del declared["help"]
-    assert {dest: run[dest] for dest in declared} == declared
+    assert {dest: predict[dest] for dest in declared} == declared == {dest: run[dest] for dest in declared}
 
 
 def test_the_defaults_are_the_dataclasses_and_each_flag_lands_in_its_field():

@@ -1,13 +1,12 @@
 """`jax3dc predict`: image in, articulated simulation-ready object out (see ``pipeline``).
 
-``predict`` and ``PredictResult`` are imported on first use, so that registering the CLI command
-(every `jax3dc` run does) does not pay for importing jax, MuJoCo and the exporters (1.7 s of
-imports for jax alone, measured with ``python -X importtime -c "import jax3dc.cli"``).
+``predict``, its ``PredictConfig`` and ``PredictResult`` are imported on first use, so that
+registering the CLI command (every `jax3dc` run does) does not pay for importing jax, MuJoCo and
+the exporters (1.7 s of imports for jax alone, measured with ``python -X importtime -c "import
+jax3dc.cli"``).
 """
 
-__all__ = ["PredictResult", "predict"]
-
-DEFAULT_MAX_NEW_TOKENS = 2048  # here, not in ``models``: the CLI's --help shows it without importing jax
+__all__ = ["PredictConfig", "PredictResult", "predict"]
 
 
 def __getattr__(name: str):

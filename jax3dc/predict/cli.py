@@ -1,6 +1,6 @@
 """`jax3dc predict IMAGE --out DIR [--stage1 BACKEND] [--stage1-model DIR] [--code-model DIR]
 [--structure-model DIR]`; the backends ``--stage1`` takes, and its help lists, are
-``jax3dc.predict.stage1.BACKENDS``."""
+``jax3dc.predict.stage1.BACKENDS``, the decoding flags ``jax3dc.decoding``'s."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import argparse
 from pathlib import Path
 
 from jax3dc.cli_args import positive_int
-from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
+from jax3dc.decoding import add_decoding_arguments, decoding_from_args
 from jax3dc.predict.segmentation import load_camera
-from jax3dc.predict.stage1 import BACKENDS, backend_help
+from jax3dc.predict.stage1 import BACKENDS, Stage1Config, backend_help
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS
 from jax3dc.release import default_structure_model
 from jax3dc.xla_flags import GENERATION_GPU_FLAGS, apply_gpu_defaults
@@ -47,7 +47,7 @@ CAMERA_HELP = ("JSON file with the image's camera in the normalised object frame
 def run(args: argparse.Namespace) -> int:
     apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts
     # lazy: the models, decoding and exporters: 0.25 s on top of `jax3dc --help`, which imports this module
-    from jax3dc.predict.pipeline import predict
+    from jax3dc.predict.pipeline import PredictConfig, predict
 
     camera = load_camera(args.camera) if args.camera else None
     width = 18
@@ -55,12 +55,11 @@ def run(args: argparse.Namespace) -> int:
     def show(name: str, path: Path) -> None:
         print(f"{name:<{width}} {path}", flush=True)
 
-    result = predict(args.image, args.stage1, args.structure_model, args.code_model, args.out, camera,
-                     stage1_model_dir=args.stage1_model,
-                     scale=args.scale, mesh_up=args.mesh_up, max_new_tokens=args.max_new_tokens, dtype=args.dtype,
-                     constrained=not args.unconstrained, candidates=args.candidates, repair=args.repair,
-                     mounted=args.mounted, on_output=show, progress=True, max_image_pixels=args.max_image_pixels,
-                     ground_joints=args.ground_joints, num_joints=args.joints)
+    stage1 = Stage1Config(args.stage1, args.stage1_model, args.code_model, args.mesh_up)
+    config = PredictConfig(stage1, args.structure_model, decoding=decoding_from_args(args), camera=camera,
+                           scale=args.scale, mounted=args.mounted, num_joints=args.joints,
+                           max_image_pixels=args.max_image_pixels)
+    result = predict(args.image, config, args.out, on_output=show, progress=True)
     verdict = "passes" if result.verdict and result.verdict.ok else "fails"
     joints = len(result.structure.joints()) if result.structure else 0
     held = " with its root held (mounted)" if result.mounted else ""
@@ -86,8 +85,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
     p.add_argument("--camera", metavar="FILE", help=CAMERA_HELP)
     p.add_argument("--out", required=True, metavar="DIR", help="folder for the outputs (created if missing)")
-    p.add_argument("--max-new-tokens", type=int, default=DEFAULT_MAX_NEW_TOKENS, metavar="N",
-                   help=f"most tokens each model may write (default {DEFAULT_MAX_NEW_TOKENS})")
     p.add_argument("--scale", type=float, metavar="M_PER_NU",
                    help="metres per normalised unit for the exports (default: the mesh file's units, "
                         "taken as metres; 1.0 for --stage1 code)")
@@ -95,18 +92,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="up axis of the --stage1 mesh file: z (this project's frame, +Z up, front -Y; what "
                         "jax3dc exports write; the default) or y (glTF's convention, +Y up, front +Z, e.g. Blender's "
                         "glTF exporter)")
-    p.add_argument("--unconstrained", action="store_true",
-                   help="decode without the grammars: the structure's, and stage 1's part-program or parameter "
-                        "grammar (default: every output parses)")
-    p.add_argument("--candidates", type=positive_int, default=1, metavar="K",
-                   help="K structures from one decode (the first greedy, the rest sampled); the physics verdict "
-                   "chooses, candidates.json says which and why (default 1)")
-    p.add_argument("--repair", action="store_true",
-                   help="move the pivot of each hinge the physics check flags to where child and parent meet, "
-                   "kept only when the verdict improves; repairs.json lists them")
-    p.add_argument("--ground-joints", action="store_true",
-                   help="correct each joint's type, axis and hinge line with the part boxes (off by default: on the "
-                   "release-3 benchmark it did not raise success on held-out real objects; docs/runs/grounding_20261128)")
+    add_decoding_arguments(p, "candidates.json", "repairs.json")
     p.add_argument("--joints", type=positive_int, metavar="N",
                    help="how many joints the object has, told to the structure model as in its training prompts "
                    "(default: the count of the object stage 1 names with --stage1 parameters; none for the other "
@@ -117,8 +103,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "and repairs are judged so, and object.xml keeps its base fixed (without it, its root "
                         "is free, as in the check; default: mounted when --stage1 parameters names such a "
                         "category (faucet, toilet, door, window), else not)")
-    p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"),
-                   help="model compute dtype (float32 on CPU is slower but exact)")
     p.add_argument("--max-image-pixels", type=positive_int, default=MAX_IMAGE_PIXELS, metavar="N",
                    help="refuse an image of more pixels, read from its header before decoding (default: %(default)s)")
     p.set_defaults(func=run)

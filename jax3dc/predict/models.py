@@ -3,8 +3,8 @@
 ``predict`` has an image from disk and an S it rendered; it hands them (as PNG bytes, lossless) to
 ``jax3dc.sampler.Sampler.generate_batch``, the decode that ``eval run`` uses for records, one
 prompt at a time. Each model becomes a plain callable (prompt text -> generated text), which is
-also the seam tests use to stand in for a model (``generate_structure`` / ``generate_program`` of
-:func:`jax3dc.predict.pipeline.predict`).
+also the seam tests use to stand in for a model (``generate_structure`` of
+:class:`jax3dc.predict.pipeline.PredictConfig`, ``generate_program`` of its stage-1 config).
 """
 
 from __future__ import annotations
@@ -15,10 +15,10 @@ from typing import Callable
 import numpy as np
 
 from jax3dc.constrained.parameters import longest_text
+from jax3dc.decoding import DecodeOptions
 from jax3dc.factories.registry import SCHEMAS
-from jax3dc.grounding import Grounding
 from jax3dc.render import png_bytes
-from jax3dc.sampler import DecodeOptions, Sampler
+from jax3dc.sampler import Sampler
 
 TextModel = Callable[[str], str]
 """Prompt text -> the model's raw output text (a structure JSON or a part program)."""
@@ -45,20 +45,17 @@ def generate_texts(sampler: Sampler, example: ImageExample, task: str, max_new_t
 
 
 def structure_model(sampler: Sampler, image_png: bytes, seg_png: bytes, max_new_tokens: int,
-                    constrained: bool = True, grounding: Grounding | None = None) -> TextModel:
-    """Stage 2 (f_str): reads (I, S, prompt) and writes the structure JSON (greedy; under the
-    structure grammar of the prompt unless ``constrained`` is off; joints grounded in the legend's
-    boxes with ``grounding``)."""
-    options = DecodeOptions(constrained=constrained, grounding=grounding)
+                    options: DecodeOptions = DecodeOptions()) -> TextModel:
+    """Stage 2 (f_str): reads (I, S, prompt) and writes the structure JSON (the first answer, greedy;
+    under the structure grammar of the prompt unless ``options.constrained``
+    is off; joints grounded in the legend's boxes with ``options.grounding``)."""
     return lambda prompt: generate_texts(sampler, ImageExample(image_png, seg_png, prompt), "structure",
                                          max_new_tokens, options)[0][0]
 
 
 def structure_candidates(sampler: Sampler, image_png: bytes, seg_png: bytes, max_new_tokens: int,
-                         candidates: int, constrained: bool = True,
-                         grounding: Grounding | None = None) -> Callable[[str], list[tuple[str, float]]]:
-    """Stage 2 with ``candidates`` answers per prompt (text, log-likelihood), the first greedy."""
-    options = DecodeOptions(constrained=constrained, candidates=candidates, grounding=grounding)
+                         options: DecodeOptions) -> Callable[[str], list[tuple[str, float]]]:
+    """Stage 2 with ``options.candidates`` answers per prompt (text, log-likelihood), the first greedy."""
     return lambda prompt: generate_texts(sampler, ImageExample(image_png, seg_png, prompt), "structure",
                                          max_new_tokens, options)
 

@@ -18,9 +18,10 @@ leaves every output made before it (and the report says what failed):
   7. report.html / report.png (always, when stage 1 gave parts), and viewer.html (when there is a
      structure; viewer_files/ beside it): the object in 3D with its joints and verdict (jax3dc.viewer).
 
-The models are plain text-in/text-out callables: pass ``generate_structure`` / ``generate_program``
-(or the image-in ``read_parameters``) to stand in for a checkpoint (tests do; so can a caller with
-its own model server).
+What to compute is one value, ``PredictConfig``; where to write it and whom to tell are
+``predict``'s other arguments. The models are plain text-in/text-out callables: set
+``generate_structure`` / ``Stage1Config.generate_program`` (or the image-in ``read_parameters``) to
+stand in for a checkpoint (tests do; so can a caller with its own model server).
 """
 
 from __future__ import annotations
@@ -35,19 +36,17 @@ import numpy as np
 from PIL import Image
 from tqdm import tqdm
 
-from jax3dc.decoding import DecodeOptions, Decoding
+from jax3dc.decoding import Decoding
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
-from jax3dc.grounding import Grounding
 from jax3dc.mounted import is_mounted
 from jax3dc.palette import object_palette
 from jax3dc.physics.findings import Verdict
-from jax3dc.predict import DEFAULT_MAX_NEW_TOKENS
 from jax3dc.predict.models import TextModel, structure_candidates, structure_model
 from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
 from jax3dc.predict.report import ReportInputs, write_report
 from jax3dc.predict.segmentation import default_camera, render_segmentation
-from jax3dc.predict.stage1 import (Reader, Stage1, Stage1Backend, Stage1Config, Stage1Image, Stage1Settings,
+from jax3dc.predict.stage1 import (Stage1, Stage1Backend, Stage1Config, Stage1Image, Stage1Settings,
                                    check_object_image, parse_stage1)
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
 from jax3dc.prompt import build_prompt
@@ -172,25 +171,49 @@ def _repaired(structure: Structure, parts: dict, boxes: dict, check: VerdictCach
 
 
 @dataclass(frozen=True)
-class _StructureSettings:
-    """predict's arguments for stage 2 (see predict)."""
+class PredictConfig:
+    """What ``predict`` makes of an image, as one value (the CLI builds it from its flags).
 
-    model_dir: str | Path | None
-    generate: TextModel | None
-    max_new_tokens: int
-    constrained: bool
-    candidates: int
-    repair: bool
-    scale: float | None
-    mounted: bool | None  # None: decided by the category stage 1 names (jax3dc.mounted)
-    grounding: Grounding | None = None
+    ``stage1``: where the parts come from (the backend and its models; jax3dc.predict.stage1).
+    ``structure_model_dir``: the structure model's checkpoint folder (``jax3dc.sampler.Sampler.load``);
+    ``generate_structure`` (SPEC §3 prompt text -> structure JSON text, seeing I and S) replaces it.
+    ``decoding``: the decoding flags (jax3dc.decoding). Its options: ``constrained`` decodes under
+    the structure grammar and, for the parameters and code backends, the parameter or part-program
+    grammar (all always parse); ``candidates`` K > 1: K answers from one decode (the first greedy),
+    chosen by the physics verdict (candidates.json says which and why); ``grounding``: correct the
+    decoded joints with the part boxes (jax3dc.grounding). ``repair``: move the pivots of flagged
+    hinges where the verdict improves (repairs.json lists them). Candidates and grounding need a
+    structure model folder, not a ``generate_structure``.
+    ``camera``: the image's camera in the normalised frame (default: a front view fitting the object).
+    ``scale``: metres per nu for the exports (default: ``Stage1.metres()``: the mesh file's units per
+    nu, assumed metres; the factory's for the parameters backend; 1.0 for the code backend, whose
+    programs are in nu).
+    ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
+    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free.
+    None: mounted when stage 1 names a category fixed in place in use (the parameters backend's
+    factory: ``jax3dc.mounted``), else not (the other backends name no category).
+    ``num_joints``: how many joints the object has, written into the prompt's ``Joints:`` line as in
+    training (SPEC §3); None: the count stage 1 knows (the parameters backend's factory object), else
+    no line (the shipped structure model then writes few or no joints).
+    ``max_image_pixels``: a larger image file is refused from its header, before decoding.
+    """
+
+    stage1: Stage1Config = field(default_factory=Stage1Config)
+    structure_model_dir: str | Path | None = None
+    generate_structure: TextModel | None = None
+    decoding: Decoding = field(default_factory=Decoding)
+    camera: Camera | None = None
+    scale: float | None = None
+    mounted: bool | None = None
+    num_joints: int | None = None
+    max_image_pixels: int = MAX_IMAGE_PIXELS
 
 
-def _stage1(image: str | Path | Image.Image, backend: Stage1Backend, settings: Stage1Settings,
-            outputs: _Outputs, max_image_pixels: int) -> tuple[Image.Image, bytes, str, Stage1]:
+def _stage1(image: str | Path | Image.Image, backend: Stage1Backend, argument: str | None, config: PredictConfig,
+            checkpoints: Checkpoints, outputs: _Outputs) -> tuple[Image.Image, bytes, str, Stage1]:
     """I (image.png) and the part meshes of ``backend`` (with the files it writes): (I in RGB, its
     PNG bytes, the sha256 of the input, the parts)."""
-    rgb, digest = _image_and_digest(image, max_image_pixels)
+    rgb, digest = _image_and_digest(image, config.max_image_pixels)
     pixels = np.asarray(rgb)
     image_png = png_bytes(pixels)  # I as the models saw it (RGB): the viewer shows it
     target = outputs.out / "image.png"
@@ -201,10 +224,11 @@ def _stage1(image: str | Path | Image.Image, backend: Stage1Backend, settings: S
     seen = Stage1Image(pixels, image_png, str(image) if isinstance(image, (str, Path)) else "the input image")
     if backend.reads_image:
         check_object_image(seen.rgb, seen.where)
+    settings = Stage1Settings(config.stage1, argument, config.decoding, checkpoints.get, outputs.text)
     return rgb, image_png, digest, backend.run(seen, settings)
 
 
-def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict, settings: _StructureSettings,
+def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict, config: PredictConfig,
             checkpoints: Checkpoints, outputs: _Outputs, progress: _Progress) -> None:
     """Structure model -> structure.json, exports and physics.json, filling ``result``; raises a
     Jax3dcError at the first step that fails (the outputs before it stay). The winner of several
@@ -212,21 +236,21 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
     the choice, the repair and physics.json)."""
     progress.step("structure model")
     parts_in = result.stage1
-    metres = settings.scale if settings.scale is not None else parts_in.metres()
-    check = VerdictCache(Physics(parts_in.parts, metres, settings.mounted))
-    generate = settings.generate
+    metres = config.scale if config.scale is not None else parts_in.metres()
+    check = VerdictCache(Physics(parts_in.parts, metres, result.mounted))
+    decoding = config.decoding
+    generate = config.generate_structure
     structure = None
     if generate is None:
-        if settings.model_dir is None:
+        if config.structure_model_dir is None:
             raise InputFileError("--structure-model", "a structure model checkpoint (--structure-model DIR) is needed")
-        sampler = checkpoints.get(settings.model_dir)
-        if settings.candidates > 1:
-            replies = structure_candidates(sampler, image_png, seg_png, settings.max_new_tokens, settings.candidates,
-                                           settings.constrained, settings.grounding)(result.prompt)
+        sampler = checkpoints.get(config.structure_model_dir)
+        if decoding.options.candidates > 1:
+            replies = structure_candidates(sampler, image_png, seg_png, decoding.max_new_tokens,
+                                           decoding.options)(result.prompt)
             result.raw_text, structure = _chosen(replies, parts_in.parts, boxes, check, outputs)
         else:
-            generate = structure_model(sampler, image_png, seg_png, settings.max_new_tokens, settings.constrained,
-                                       settings.grounding)
+            generate = structure_model(sampler, image_png, seg_png, decoding.max_new_tokens, decoding.options)
     if result.raw_text is None:
         result.raw_text = generate(result.prompt)
     if structure is None:
@@ -237,86 +261,47 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
             raise StructureError(e.rule, e.where, f"{e.message} (the model's raw output is in {raw})") from None
         structure = canonicalize(parsed, boxes)
     progress.step("exports")
-    if settings.repair:
+    if decoding.repair:
         structure = _repaired(structure, parts_in.parts, boxes, check, outputs)
     outputs.text("structure", "structure.json", to_json(structure))
     result.structure = structure
     named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
                                       for pid, n in structure.nodes.items()})
-    for name, path in write_exports(named, parts_in.parts, outputs.out, metres, settings.mounted).items():
+    for name, path in write_exports(named, parts_in.parts, outputs.out, metres, result.mounted).items():
         outputs.wrote(name, path)
     progress.step("physics")
     result.verdict = check(structure)
     outputs.wrote("physics", write_physics(result.verdict, outputs.out))
 
 
-def predict(image: str | Path | Image.Image, stage1: str | None = None, structure_model_dir: str | Path | None = None,
-            code_model_dir: str | Path | None = None, out: str | Path = "prediction", camera: Camera | None = None,
-            generate_structure: TextModel | None = None, generate_program: TextModel | None = None,
-            stage1_model_dir: str | Path | None = None, read_parameters: Reader | None = None,
-            scale: float | None = None, mesh_up: str = "z", max_new_tokens: int = DEFAULT_MAX_NEW_TOKENS,
-            dtype: str = "bfloat16", constrained: bool = True, candidates: int = 1, repair: bool = False,
-            mounted: bool | None = None, on_output: OutputListener | None = None, progress: bool = False,
-            max_image_pixels: int = MAX_IMAGE_PIXELS, ground_joints: bool = False,
-            checkpoints: Checkpoints | None = None, num_joints: int | None = None) -> PredictResult:
-    """Runs both stages on ``image`` and writes every output into ``out``.
+def predict(image: str | Path | Image.Image, config: PredictConfig, out: str | Path = "prediction",
+            on_output: OutputListener | None = None, progress: bool = False,
+            checkpoints: Checkpoints | None = None) -> PredictResult:
+    """Runs both stages on ``image`` as ``config`` says and writes every output into ``out``.
 
-    ``stage1``: a backend of jax3dc.predict.stage1.BACKENDS, ``NAME`` or ``NAME:ARG`` ("parameters",
-    "code", "mesh:FILE", "parts:DIR" or one registered); None:
-    "parameters" when a stage-1 model is given or ships, else an InputFileError naming what to pass.
-    ``structure_model_dir`` / ``code_model_dir``: checkpoint folders (``jax3dc.sampler.Sampler.load``);
-    ``stage1_model_dir``: the parameters backend's model folder (jax3dc.predict.stage1.load_reader; default:
-    the shipped one). ``generate_structure`` (SPEC §3 prompt text -> structure JSON text, seeing I
-    and S), ``generate_program`` (the code prompt -> part program text, seeing I) and
-    ``read_parameters`` (I as RGB uint8 -> parameter text) replace them. ``camera``: the image's
-    camera in the normalised frame (default: a front view fitting the object). ``scale``: metres
-    per nu for the exports (default: the mesh file's units per nu, assumed metres; the factory's for
-    the parameters backend; 1.0 for the code backend, whose programs are in nu).
-    ``mesh_up``: the mesh file's up axis, "z" (ours and jax3dc's exports) or "y" (glTF's convention).
-    ``constrained``: decode under the structure grammar and, for the parameters and code backends,
-    the parameter or part-program grammar (all always parse). ``candidates`` K > 1: K
-    answers from one decode (the first greedy), chosen by the physics verdict (candidates.json says
-    which and why). ``repair``: move the pivots of flagged hinges where the verdict improves
-    (repairs.json lists them). Both need a structure model folder, not a ``generate_structure``.
-    ``mounted``: the object is fixed in place in use (a faucet, a toilet): the physics checks hold its
-    root instead of standing it on a floor, and object.xml keeps its base fixed instead of free.
-    None: mounted when stage 1 names a category fixed in place in use (the parameters backend's
-    factory: ``jax3dc.mounted``), else not (the other backends name no category).
+    ``on_output``: told each output's name and path as it is written (the CLI prints them).
     ``progress``: a progress bar of the steps on stderr when it is a terminal (the CLI's).
-    ``ground_joints``: correct the decoded joints with the part boxes (jax3dc.grounding; a structure
-    model folder, not a ``generate_structure``).
-    ``max_image_pixels``: a larger image file is refused from its header, before decoding.
-    ``num_joints``: how many joints the object has, written into the prompt's ``Joints:`` line as in
-    training (SPEC §3); None: the count stage 1 knows (the parameters backend's factory object), else
-    no line (the shipped structure model then writes few or no joints).
     ``checkpoints``: the loaded models to use (and add to), so that a caller predicting many images
-    loads each checkpoint once; their dtype, not ``dtype``, applies (default: a fresh one).
-    Raises a Jax3dcError subclass on bad input, after writing every output it could.
+    loads each checkpoint once; their dtype, not ``config.decoding.dtype``, applies (default: a fresh one).
+    Raises a Jax3dcError subclass on bad input, after writing every output it could; a bad stage-1
+    backend before writing anything.
     """
     out = Path(out)
-    backend, argument = parse_stage1(stage1, stage1_model_dir)  # a bad --stage1 is refused before anything is written
+    backend, argument = parse_stage1(config.stage1.backend, config.stage1.model_dir)
     out.mkdir(parents=True, exist_ok=True)
     outputs = _Outputs(out, on_output)
-    checkpoints = checkpoints if checkpoints is not None else Checkpoints(dtype)
+    checkpoints = checkpoints if checkpoints is not None else Checkpoints(config.decoding.dtype)
     steps = _Progress(progress)
-    stage1_settings = Stage1Settings(Stage1Config(stage1, stage1_model_dir, code_model_dir, mesh_up, read_parameters,
-                                                  generate_program), argument,
-                                     Decoding(DecodeOptions(constrained=constrained), max_new_tokens, dtype),
-                                     checkpoints.get, outputs.text)
-    settings = _StructureSettings(structure_model_dir, generate_structure, max_new_tokens, constrained, candidates,
-                                  repair, scale, mounted, Grounding() if ground_joints else None)
     try:
         steps.step("stage 1")
-        rgb, image_png, digest, parts_in = _stage1(image, backend, stage1_settings, outputs, max_image_pixels)
+        rgb, image_png, digest, parts_in = _stage1(image, backend, argument, config, checkpoints, outputs)
         palette = object_palette(PALETTE_CATEGORY, digest)
-        if settings.mounted is None:
-            settings = replace(settings, mounted=is_mounted(parts_in.category))
+        mounted = config.mounted if config.mounted is not None else is_mounted(parts_in.category)
         boxes = part_boxes(parts_in.parts)
-        camera_given = camera is not None
-        camera = camera or default_camera(parts_in.parts)
-        joints = num_joints if num_joints is not None else parts_in.joints
+        camera = config.camera or default_camera(parts_in.parts)
+        joints = config.num_joints if config.num_joints is not None else parts_in.joints
         result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, joints), outputs.files,
-                               mounted=settings.mounted)
+                               mounted=mounted)
         outputs.text("prompt", "prompt.txt", result.prompt)
         save_parts(parts_in.parts, out / "parts")
         outputs.wrote("parts", out / "parts")
@@ -328,11 +313,11 @@ def predict(image: str | Path | Image.Image, stage1: str | None = None, structur
 
         error: Jax3dcError | None = None
         try:
-            _stage2(result, image_png, seg_png, boxes, settings, checkpoints, outputs, steps)
+            _stage2(result, image_png, seg_png, boxes, config, checkpoints, outputs, steps)
         except Jax3dcError as e:
             error = e
         steps.step("report")
-        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), camera_given,
+        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), config.camera is not None,
                               result.structure, result.verdict, None if error is None else str(error))
         for name, path in write_report(report, out).items():
             outputs.wrote(name, path)

@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from jax3dc.predict import predict
+from jax3dc.predict import PredictConfig, predict
+from jax3dc.predict.stage1 import Stage1Config
 from jax3dc.predict.segmentation import load_camera
 from jax3dc.cli import main
 from jax3dc.errors import InputFileError, ProgramError, StructureError
@@ -23,8 +24,8 @@ def inputs(tmp_path_factory):
 
 
 def run(image, stage1, out, text="", program=None):
-    return predict(image, stage1, out=out, camera=CAMERA, generate_structure=lambda prompt: text,
-                   generate_program=None if program is None else (lambda prompt: program))
+    stage1_config = Stage1Config(stage1, generate_program=None if program is None else (lambda prompt: program))
+    return predict(image, PredictConfig(stage1_config, generate_structure=lambda prompt: text, camera=CAMERA), out)
 
 
 def test_not_an_image(inputs, tmp_path):
@@ -71,7 +72,8 @@ def test_program_that_fails_to_parse_names_the_line(inputs, tmp_path):
 
 def test_code_backend_without_a_code_model(inputs, tmp_path):
     with pytest.raises(InputFileError, match="--code-model"):
-        predict(inputs[0], "code", out=tmp_path, generate_structure=lambda prompt: target_json())
+        predict(inputs[0], PredictConfig(Stage1Config("code"), generate_structure=lambda prompt: target_json()),
+                tmp_path)
 
 
 @pytest.mark.parametrize("text, rule", [

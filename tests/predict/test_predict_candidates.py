@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import json
 
+from jax3dc.decoding import DecodeOptions, Decoding
 from jax3dc.predict import pipeline
+from jax3dc.predict.stage1 import Stage1Config
 from jax3dc.structure import to_json
 from jax3dc.verify import verdicts
 from predict_cases import CAMERA, target_json, write_glb, write_image
@@ -24,8 +26,9 @@ def test_the_winner_is_parsed_once_and_each_verdict_computed_once(tmp_path, monk
     monkeypatch.setattr(verdicts.Physics, "verdicts", lambda self, ss: checked.extend(to_json(s) for s in ss) or real(self, ss))
 
     out = tmp_path / "out"
-    result = pipeline.predict(write_image(tmp_path / "image.png"), f"mesh:{write_glb(tmp_path / 'object.glb')}",
-                              "stand-in", out=out, camera=CAMERA, candidates=2, repair=True)
+    config = pipeline.PredictConfig(Stage1Config(f"mesh:{write_glb(tmp_path / 'object.glb')}"), "stand-in",
+                                    decoding=Decoding(DecodeOptions(candidates=2), repair=True), camera=CAMERA)
+    result = pipeline.predict(write_image(tmp_path / "image.png"), config, out)
 
     assert parsed_again == []  # the structure is the one the choice parsed
     assert len(checked) == len(set(checked)) == 1  # both candidates, the repair and physics.json: one verdict

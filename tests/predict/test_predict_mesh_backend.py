@@ -101,11 +101,13 @@ def write_text(path, text):
 
 
 def test_own_glb_export_reads_back_with_the_same_ids(tmp_path):
-    from jax3dc.predict import predict
+    from jax3dc.predict import PredictConfig, predict
+    from jax3dc.predict.stage1 import Stage1Config
     from predict_cases import CAMERA, target_json, write_image
 
-    first = predict(write_image(tmp_path / "image.png"), f"mesh:{write_glb(tmp_path / 'object.glb')}",
-                    out=tmp_path / "first", camera=CAMERA, generate_structure=lambda prompt: target_json())
+    config = PredictConfig(Stage1Config(f"mesh:{write_glb(tmp_path / 'object.glb')}"),
+                           generate_structure=lambda prompt: target_json(), camera=CAMERA)
+    first = predict(write_image(tmp_path / "image.png"), config, tmp_path / "first")
     again = stage1_from_mesh(first.out / "object.glb")
     assert sorted(again.parts) == sorted(first.stage1.parts)
     for pid, mesh in first.stage1.parts.items():

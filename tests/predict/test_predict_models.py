@@ -34,14 +34,17 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
     import jax
 
     from data_pipeline.record import Record
+    from jax3dc.decoding import DecodeOptions, Decoding
     from jax3dc.errors import StructureError
-    from jax3dc.predict.pipeline import predict
-    from jax3dc.sampler import DecodeOptions, Sampler
+    from jax3dc.predict.pipeline import PredictConfig, predict
+    from jax3dc.predict.stage1 import Stage1Config
+    from jax3dc.sampler import Sampler
 
     out = tmp_path / "out"
+    decoding = Decoding(DecodeOptions(constrained=False), MAX_NEW_TOKENS, "float32")
     with pytest.raises(StructureError):  # a random model, unconstrained, does not write a valid structure
-        predict(inputs[0], f"mesh:{inputs[1]}", checkpoint, out=out, camera=CAMERA,
-                max_new_tokens=MAX_NEW_TOKENS, dtype="float32", constrained=False)
+        predict(inputs[0], PredictConfig(Stage1Config(f"mesh:{inputs[1]}"), checkpoint, decoding=decoding,
+                                         camera=CAMERA), out)
     raw = (out / "structure_raw.txt").read_text()
     assert (out / "report.html").exists() and not (out / "structure.json").exists()
 
@@ -56,12 +59,15 @@ def test_in_memory_generation_equals_record_generation(checkpoint, inputs, tmp_p
 
 @pytest.mark.slow
 def test_code_model_garbage_is_a_program_error_with_the_program_kept(checkpoint, inputs, tmp_path):
-    from jax3dc.predict.pipeline import predict
+    from jax3dc.decoding import Decoding
     from jax3dc.errors import ProgramError
+    from jax3dc.predict.pipeline import PredictConfig, predict
+    from jax3dc.predict.stage1 import Stage1Config
 
+    config = PredictConfig(Stage1Config("code", code_model_dir=checkpoint), checkpoint,
+                           decoding=Decoding(max_new_tokens=MAX_NEW_TOKENS, dtype="float32"))
     with pytest.raises(ProgramError):
-        predict(inputs[0], "code", checkpoint, checkpoint, out=tmp_path, max_new_tokens=MAX_NEW_TOKENS,
-                dtype="float32")
+        predict(inputs[0], config, tmp_path)
     assert (tmp_path / "program.txt").exists()
 
 

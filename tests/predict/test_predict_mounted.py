@@ -14,7 +14,8 @@ import mujoco
 
 from jax3dc.factories import generate_object
 from jax3dc.physics.verdict import check_object
-from jax3dc.predict import predict
+from jax3dc.predict import PredictConfig, predict
+from jax3dc.predict.stage1 import Stage1Config
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.structure import canonicalize, parse_structure, to_json
 from predict_cases import write_image
@@ -24,8 +25,9 @@ def test_mounted_prediction_holds_the_root_in_the_physics_check(tmp_path):
     faucet = generate_object("faucet", 0)
     save_parts(faucet.parts, tmp_path / "parts")
     target = to_json(canonicalize(faucet.structure, part_boxes(faucet.parts)))
-    result = predict(write_image(tmp_path / "image.png"), f"parts:{tmp_path / 'parts'}", out=tmp_path / "out",
-                     generate_structure=lambda prompt: target, mounted=True)
+    config = PredictConfig(Stage1Config(f"parts:{tmp_path / 'parts'}"), generate_structure=lambda prompt: target,
+                           mounted=True)
+    result = predict(write_image(tmp_path / "image.png"), config, tmp_path / "out")
     verdict = json.loads((tmp_path / "out" / "physics.json").read_text())
     assert verdict == result.verdict.to_json() and verdict["checks"]["gravity"] == []
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "object.xml"))

@@ -14,7 +14,8 @@ import pytest
 import trimesh
 
 from jax3dc.render import mujoco, png_array  # mujoco imported after render chose the GL backend
-from jax3dc.predict import predict
+from jax3dc.predict import PredictConfig, predict
+from jax3dc.predict.stage1 import Stage1Config
 from jax3dc.geometry.parts import load_parts
 from jax3dc.prompt import CODE_PROMPT, LEGEND_HEADER
 from jax3dc.structure import parse_structure, to_json
@@ -24,13 +25,18 @@ OUTPUTS = ("structure.json", "seg.png", "parts", "object.urdf", "object.xml", "o
            "physics.json", "report.html", "report.png")
 
 
+def stand_in(stage1: str) -> PredictConfig:
+    """Stage 1 from ``stage1``, the image's camera, and the object's own target as the structure model."""
+    return PredictConfig(Stage1Config(stage1), generate_structure=lambda prompt: target_json(), camera=CAMERA)
+
+
 @pytest.fixture(scope="module")
 def mesh_run(tmp_path_factory):
     folder = tmp_path_factory.mktemp("mesh_run")
     prompts, listed = [], []
-    result = predict(write_image(folder / "image.png"), f"mesh:{write_glb(folder / 'object.glb')}",
-                     out=folder / "out", camera=CAMERA,
-                     generate_structure=lambda prompt: prompts.append(prompt) or target_json(),
+    config = PredictConfig(Stage1Config(f"mesh:{write_glb(folder / 'object.glb')}"),
+                           generate_structure=lambda prompt: prompts.append(prompt) or target_json(), camera=CAMERA)
+    result = predict(write_image(folder / "image.png"), config, folder / "out",
                      on_output=lambda name, path: listed.append(path))
     return result, prompts, listed
 
@@ -67,8 +73,7 @@ def test_predict_seg_png_matches_a_direct_render(mesh_run):
 
 def test_predict_is_deterministic(mesh_run, tmp_path):
     first = mesh_run[0]
-    predict(first.out.parent / "image.png", f"mesh:{first.out.parent / 'object.glb'}", out=tmp_path,
-            camera=CAMERA, generate_structure=lambda prompt: target_json())
+    predict(first.out.parent / "image.png", stand_in(f"mesh:{first.out.parent / 'object.glb'}"), tmp_path)
     for name in ("structure.json", "seg.png", "object.xml", "object.urdf", "physics.json"):
         assert (tmp_path / name).read_bytes() == (first.out / name).read_bytes(), name
 
@@ -76,9 +81,9 @@ def test_predict_is_deterministic(mesh_run, tmp_path):
 def test_code_backend_runs_the_program_into_named_parts(tmp_path):
     obj = factory_object()
     asked = []
-    result = predict(write_image(tmp_path / "image.png"), "code", out=tmp_path / "out",
-                     generate_program=lambda prompt: asked.append(prompt) or obj.program_text,
-                     generate_structure=lambda prompt: target_json())
+    program = Stage1Config("code", generate_program=lambda prompt: asked.append(prompt) or obj.program_text)
+    config = PredictConfig(program, generate_structure=lambda prompt: target_json())
+    result = predict(write_image(tmp_path / "image.png"), config, tmp_path / "out")
     assert asked == [CODE_PROMPT]
     assert (tmp_path / "out" / "program.txt").read_text() == obj.program_text
     assert result.stage1.names == obj.names
@@ -93,8 +98,9 @@ def test_fenced_reply_with_end_marker_parses_and_seg_has_the_image_size(tmp_path
     wide = tmp_path / "wide.png"
     Image.new("RGB", (120, 80), (40, 40, 40)).save(wide)
     reply = "```json\n" + target_json() + "\n```<|im_end|>"
-    result = predict(wide, f"mesh:{write_glb(tmp_path / 'object.glb')}", out=tmp_path / "out", camera=CAMERA,
-                     generate_structure=lambda prompt: reply)
+    config = PredictConfig(Stage1Config(f"mesh:{write_glb(tmp_path / 'object.glb')}"),
+                           generate_structure=lambda prompt: reply, camera=CAMERA)
+    result = predict(wide, config, tmp_path / "out")
     assert (tmp_path / "out" / "structure.json").read_text() == target_json()
     assert result.raw_text == reply
     assert png_array((tmp_path / "out" / "seg.png").read_bytes()).shape == (80, 120, 3)
@@ -104,8 +110,8 @@ def test_obj_groups_give_the_same_outputs_as_the_glb(mesh_run, tmp_path):
     from predict_cases import write_obj_groups
 
     first = mesh_run[0]
-    predict(first.out.parent / "image.png", f"mesh:{write_obj_groups(tmp_path / 'object.obj')}", out=tmp_path / "out",
-            camera=CAMERA, generate_structure=lambda prompt: target_json())
+    predict(first.out.parent / "image.png", stand_in(f"mesh:{write_obj_groups(tmp_path / 'object.obj')}"),
+            tmp_path / "out")
     assert (tmp_path / "out" / "prompt.txt").read_text() == (first.out / "prompt.txt").read_text()
     seg, want = (png_array((folder / "seg.png").read_bytes()) for folder in (tmp_path / "out", first.out))
     assert np.mean(np.all(seg == want, axis=-1)) > 0.999
@@ -115,8 +121,7 @@ def test_obj_groups_give_the_same_outputs_as_the_glb(mesh_run, tmp_path):
 
 def test_parts_dir_backend_reads_a_previous_prediction(mesh_run, tmp_path):
     first = mesh_run[0]
-    again = predict(first.out.parent / "image.png", f"parts:{first.out / 'parts'}", out=tmp_path,
-                    camera=CAMERA, generate_structure=lambda prompt: target_json())
+    again = predict(first.out.parent / "image.png", stand_in(f"parts:{first.out / 'parts'}"), tmp_path)
     assert sorted(again.stage1.parts) == sorted(first.stage1.parts)
     for name in ("prompt.txt", "structure.json", "physics.json"):
         assert (tmp_path / name).read_text() == (first.out / name).read_text(), name
@@ -128,8 +133,7 @@ def test_transparent_image_is_on_white_like_the_processor(mesh_run, tmp_path):
 
     rgba = Image.new("RGBA", (64, 64), (200, 10, 10, 0))  # transparent red: white once composited
     rgba.paste((10, 10, 200, 255), (16, 16, 48, 48))
-    predict(rgba, f"mesh:{mesh_run[0].out.parent / 'object.glb'}", out=tmp_path, camera=CAMERA,
-            generate_structure=lambda prompt: target_json())
+    predict(rgba, stand_in(f"mesh:{mesh_run[0].out.parent / 'object.glb'}"), tmp_path)
     report = np.asarray(Image.open(tmp_path / "report.png").convert("RGB"))
     assert report[0, 0].tolist() == [255, 255, 255]  # the I panel's corner
     assert report[256, 256].tolist() == [10, 10, 200]  # its opaque middle

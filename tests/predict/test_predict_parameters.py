@@ -22,9 +22,10 @@ from jax3dc.errors import InputFileError
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import load_parts
 from jax3dc.parameters import ParameterError, format_parameters, parse_parameters
-from jax3dc.predict import predict
+from jax3dc.decoding import Decoding
+from jax3dc.predict import PredictConfig, predict
 from jax3dc.predict import stage1 as stage1_module
-from jax3dc.predict.stage1 import BACKENDS, PARAMETERS, ReaderKind, check_object_image, parse_stage1
+from jax3dc.predict.stage1 import BACKENDS, PARAMETERS, ReaderKind, Stage1Config, check_object_image, parse_stage1
 from predict_cases import CAMERA, write_image
 from tests.factory_samples import sample_parameters
 from tests.tiny_checkpoint import write_tiny_release_vocab_checkpoint
@@ -37,6 +38,13 @@ def rigid_star(prompt: str) -> str:
     ids = [int(i) for i in re.findall(r"^(\d+): #", prompt, re.MULTILINE)]
     nodes = {str(i): {"parent": None if i == ids[0] else ids[0], "material": 0} for i in ids}
     return json.dumps({"materials": {"0": {"family": "Wood", "desc": "oak"}}, "nodes": nodes, "relations": []})
+
+
+def parameters_config(model_dir=None, read=None, **fields) -> PredictConfig:
+    """The parameters backend with the model in ``model_dir`` (or the stand-in ``read``) and
+    ``rigid_star`` as the structure model."""
+    return PredictConfig(Stage1Config(PARAMETERS, model_dir, read_parameters=read), generate_structure=rigid_star,
+                         **fields)
 
 
 def fake_net_folder(folder, monkeypatch, seen: list):
@@ -82,8 +90,7 @@ def no_shipped_stage1(monkeypatch, tmp_path):
 @pytest.mark.slow  # about 20 s on 2 idle cores: the grammar's tables and the decode's compile
 def test_parameters_backend_from_the_image(model, image, tmp_path):
     out = tmp_path / "out"
-    result = predict(image, "parameters", out=out, stage1_model_dir=model, camera=CAMERA,
-                     generate_structure=rigid_star, dtype="float32")
+    result = predict(image, parameters_config(model, camera=CAMERA, decoding=Decoding(dtype="float32")), out)
     text = (out / "parameters.txt").read_text()
     obj = run_parameters(parse_parameters(text, SCHEMAS))  # the model's text, run again, is what stage 1 gave
     assert (out / "program.txt").read_text() == obj.program_text
@@ -107,7 +114,7 @@ def test_default_stage1_is_the_shipped_model(image, tmp_path, monkeypatch):
     shipped = fake_net_folder(tmp_path / "stage1", monkeypatch, seen := [])
     monkeypatch.setattr(release, "STAGE1_DIR", shipped)
     assert parse_stage1(None) == (BACKENDS[PARAMETERS], None)
-    result = predict(image, out=tmp_path / "out", camera=CAMERA, generate_structure=rigid_star)
+    result = predict(image, PredictConfig(generate_structure=rigid_star, camera=CAMERA), tmp_path / "out")
     assert seen[0] == shipped and result.stage1.source == PARAMETERS
     assert (tmp_path / "out" / "parameters.txt").read_text() == GOOD and (tmp_path / "out" / "object.xml").is_file()
 
@@ -130,7 +137,7 @@ def test_cli_default_reads_the_shipped_folder(image, tmp_path, capsys, monkeypat
 
 def test_parameters_without_a_model_folder(image, tmp_path, no_shipped_stage1):
     with pytest.raises(InputFileError, match="--stage1-model"):
-        predict(image, "parameters", out=tmp_path, generate_structure=rigid_star)
+        predict(image, parameters_config(), tmp_path)
 
 
 @pytest.mark.parametrize("kind", ["blank", "noise"])
@@ -149,7 +156,7 @@ def test_too_small_image(tmp_path):
     path = tmp_path / "tiny.png"
     Image.fromarray(np.full((20, 40, 3), 90, np.uint8)).save(path)
     with pytest.raises(InputFileError, match="40x20 px, too small"):
-        predict(path, "parameters", out=tmp_path / "out", read_parameters=lambda rgb: GOOD)
+        predict(path, parameters_config(read=lambda rgb: GOOD), tmp_path / "out")
 
 
 def test_the_check_accepts_a_render_and_refuses_what_holds_no_object(image, tmp_path):
@@ -164,15 +171,14 @@ def test_the_check_accepts_a_render_and_refuses_what_holds_no_object(image, tmp_
 def test_a_text_that_does_not_run_names_the_entry_and_is_kept(image, tmp_path):
     bad = GOOD.replace("length=0.", "length=9.")
     with pytest.raises(ParameterError, match="length"):
-        predict(image, "parameters", out=tmp_path, read_parameters=lambda rgb: bad, generate_structure=rigid_star)
+        predict(image, parameters_config(read=lambda rgb: bad), tmp_path)
     assert (tmp_path / "parameters.txt").read_text() == bad and not (tmp_path / "parts").exists()
 
 
 def test_another_reader_plugs_in_by_its_marker(image, tmp_path, monkeypatch):
     """A folder with another kind's marker file is read by that kind (the image network's entry will be one)."""
     folder = fake_net_folder(tmp_path / "net", monkeypatch, seen := [])
-    result = predict(image, "parameters", out=tmp_path / "out", stage1_model_dir=folder, camera=CAMERA,
-                     generate_structure=rigid_star)
+    result = predict(image, parameters_config(folder, camera=CAMERA), tmp_path / "out")
     assert seen == [folder, (96, 96, 3)]
     assert result.stage1.program == run_parameters(parse_parameters(GOOD, SCHEMAS)).program_text
     with pytest.raises(InputFileError, match="stage1_net.json .*config.json"):
@@ -184,8 +190,8 @@ def test_a_category_fixed_in_place_is_mounted_unless_told(image, tmp_path):
     explicit choice wins, and a category that stands free stays free."""
     faucet = format_parameters(sample_parameters("faucet", 0), SCHEMAS["faucet"])
     runs = {"default": (faucet, None), "told": (faucet, False), "stapler": (GOOD, None)}
-    mounted = {name: predict(image, "parameters", out=tmp_path / name, read_parameters=lambda rgb, t=text: t,
-                             camera=CAMERA, generate_structure=rigid_star, mounted=flag).mounted
+    mounted = {name: predict(image, parameters_config(read=lambda rgb, t=text: t, camera=CAMERA, mounted=flag),
+                             tmp_path / name).mounted
                for name, (text, flag) in runs.items()}
     assert mounted == {"default": True, "told": False, "stapler": False}
     assert "<freejoint" not in (tmp_path / "default" / "object.xml").read_text()
@@ -200,10 +206,11 @@ def test_stage_2_is_told_the_joints_of_stage_1s_object_as_in_training(image, tmp
         prompts.append(prompt)
         return rigid_star(prompt)
 
-    predict(image, out=tmp_path / "a", camera=CAMERA, generate_structure=star)
+    predict(image, PredictConfig(generate_structure=star, camera=CAMERA), tmp_path / "a")
     joints = len(run_parameters(parse_parameters(GOOD, SCHEMAS)).structure.joints())
     assert joints >= 1 and f"Joints: {joints}" in prompts[0].splitlines()
-    predict(image, out=tmp_path / "b", camera=CAMERA, generate_structure=star, num_joints=5)
+    predict(image, PredictConfig(generate_structure=star, camera=CAMERA, num_joints=5), tmp_path / "b")
     assert "Joints: 5" in prompts[1].splitlines()  # the caller's count wins
-    predict(image, f"parts:{tmp_path / 'a' / 'parts'}", out=tmp_path / "c", camera=CAMERA, generate_structure=star)
+    predict(image, PredictConfig(Stage1Config(f"parts:{tmp_path / 'a' / 'parts'}"), generate_structure=star,
+                                 camera=CAMERA), tmp_path / "c")
     assert not any(line.startswith("Joints") for line in prompts[2].splitlines())  # a parts folder names no count

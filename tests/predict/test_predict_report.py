@@ -9,7 +9,8 @@ import pytest
 from PIL import Image
 
 from jax3dc.physics.findings import WARNING, Finding, Verdict
-from jax3dc.predict import predict
+from jax3dc.predict import PredictConfig, predict
+from jax3dc.predict.stage1 import Stage1Config
 from jax3dc.predict.report import PANEL
 from jax3dc.palette import hex_colour, part_colour
 from predict_cases import factory_object, target_json, write_image
@@ -18,9 +19,9 @@ from predict_cases import factory_object, target_json, write_image
 @pytest.fixture(scope="module")
 def code_run(tmp_path_factory):
     folder = tmp_path_factory.mktemp("code_run")
-    return predict(write_image(folder / "image.png"), "code", out=folder / "out",
-                   generate_program=lambda prompt: factory_object().program_text,
-                   generate_structure=lambda prompt: target_json())
+    config = PredictConfig(Stage1Config("code", generate_program=lambda prompt: factory_object().program_text),
+                           generate_structure=lambda prompt: target_json())
+    return predict(write_image(folder / "image.png"), config, folder / "out")
 
 
 def test_html_names_every_part_with_its_colour_and_joint(code_run):

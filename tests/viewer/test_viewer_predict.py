@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import json
 
-from jax3dc.predict import predict
+from jax3dc.predict import PredictConfig, predict
+from jax3dc.predict.stage1 import Stage1Config
 from jax3dc.cli import main
 from jax3dc.geometry.parts import part_boxes
 from jax3dc.structure import canonicalize, to_json
@@ -21,8 +22,8 @@ def test_predict_writes_a_viewer_that_view_rewrites(tmp_path) -> None:
     (tmp_path / "photo.png").write_bytes(png((90, 160, 60)))
     target = to_json(canonicalize(structure, part_boxes(parts)))
     listed = []
-    result = predict(tmp_path / "photo.png", f"parts:{tmp_path / 'parts'}", out=tmp_path / "out",
-                     generate_structure=lambda prompt: target, on_output=lambda name, path: listed.append(name))
+    config = PredictConfig(Stage1Config(f"parts:{tmp_path / 'parts'}"), generate_structure=lambda prompt: target)
+    result = predict(tmp_path / "photo.png", config, tmp_path / "out", on_output=lambda name, path: listed.append(name))
     page = result.out / "viewer.html"
     assert "viewer" in listed and "image" in listed and page.is_file()
     data = page_data(page)
