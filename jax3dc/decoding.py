@@ -76,8 +76,8 @@ def add_decoding_arguments(parser: argparse.ArgumentParser, choice_file: str, re
                         "legend, a part program, a factory's category and parameters)")
     parser.add_argument("--candidates", type=positive_int, default=options.candidates, metavar="K",
                         help="K structures per image from one decode, the first greedy, the rest sampled "
-                        f"(--temperature, --top-p, --seed); K > 1 lets the physics verdict choose, and {choice_file} says which won "
-                        "and why (default %(default)s)")
+                        f"(--temperature, --top-p, --seed); K > 1 lets the physics verdict choose, and {choice_file} "
+                        "says which won and why (default %(default)s)")
     parser.add_argument("--repair", action="store_true",
                         help="move the pivot of each hinge of the chosen structure that the physics check flags to a "
                         f"line where child and parent meet, kept only when the verdict improves ({repair_file} lists "
