@@ -87,6 +87,7 @@ def _frame_front(path: str) -> float:
     x, z = (a.ravel() for a in np.meshgrid(grid, grid))
     origins = np.stack([x, np.full(x.size, mesh.bounds[0][1] - 1.0), z], axis=1)
     hits, _, _ = mesh.ray.intersects_location(origins, np.tile((0.0, 1.0, 0.0), (x.size, 1)), multiple_hits=False)
+    hits = np.asarray(hits, dtype=np.float64).reshape(-1, 3)  # trimesh's rtree engine gives (0,) for no hit
     v = mesh.vertices
     inside = v[(v[:, 0] > 0.005) & (v[:, 0] < 0.995) & (v[:, 2] > 0.005) & (v[:, 2] < 0.995)]
     return float(np.concatenate([[0.0], hits[:, 1], inside[:, 1]]).min())

