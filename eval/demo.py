@@ -14,7 +14,7 @@ Stages, each printing one line and where its outputs are:
                 both on those images (from pixels scored by parts matched by box overlap: eval.pixels)
   7. train      only with --train-minutes > 0: `jax3dc data tokenizer` and the `tiny` preset
                 trained from scratch on the train split for that many CPU minutes (a few minutes
-                of CPU teach it nothing useful; GPUs train the real thing: bench/release_model.py)
+                of CPU teach it nothing useful; GPUs train the real thing: recipes/release_model.py)
 summary.json lists every stage.
 """
 

@@ -71,7 +71,7 @@ def run_eval(args: argparse.Namespace) -> int:
         raise Jax3dcError("give at most one of --checkpoint, --predictions, --reference-as-prediction")
     if args.ground_joints and not (args.task == "structure" and args.predictions is None and not args.reference_as_prediction):
         raise Jax3dcError("--ground-joints grounds structures as a checkpoint decodes them (--task structure); to ground "
-                          "a predictions file, run python3 -m bench.joint_grounding")
+                          "a predictions file, run python3 -m eval.evaluate joint_grounding")
     if not any(sources):  # the shipped default model
 
         args.checkpoint = str(default_structure_model())

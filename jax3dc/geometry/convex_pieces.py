@@ -22,7 +22,7 @@ objects, or another worker of a sweep, never decomposes them again. ``decompose`
 computation.
 
 CoACD (``coacd`` 1.0.14 on PyPI, default threshold 0.05) was measured against this on the physics
-ground-truth bench (``bench/physics_ground_truth.py --seeds 1``: the 40 factory categories and the
+ground-truth bench (``eval/evaluators/physics_ground_truth.py --seeds 1``: the 40 factory categories and the
 9 PartNet-Mobility fixtures, 76 joints, 321 motion-changing mutations; 2 shared cores), CoACD
 decomposing the components this rule calls concave. It is worse and far slower, so the project
 keeps its own:

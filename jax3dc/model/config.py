@@ -161,7 +161,7 @@ class Qwen3VLConfig:
     @classmethod
     def mini(cls, vocab_size: int = 2048) -> Qwen3VLConfig:
         """About a third of ``release`` (4 decoder layers of 192): the small end of the size sweep
-        (bench/size_sweep.py) that chose the release size."""
+        (eval/evaluators/size_sweep.py) that chose the release size."""
         return cls(
             vision=VisionConfig(depth=2, hidden_size=128, intermediate_size=512, num_heads=2,
                                 out_hidden_size=192, num_position_embeddings=256,

@@ -226,7 +226,7 @@ def stage1_from_parameters(text: str) -> Stage1:
 #   the faces of parts), i.i.d. noise nowhere;
 # * blank: almost nothing differs from the background colour (the median of the border), measured on
 #   the image shrunk to at most COVERAGE_SIDE px so that sensor or JPEG noise does not count.
-# The thresholds leave a wide margin on the data (`python3 -m bench.image_check --data DIR ...`):
+# The thresholds leave a wide margin on the data (`python3 -m eval.evaluate image_check --data DIR ...`):
 # over 10,140 renders, none refused (procedural objects in the plain look on black at 32, 64 and 448
 # px and in varied looks with sky, floor and textures at 32 to 224 px, varied scenes, and the
 # PartNet-Mobility fixtures on black at 224 px), the lowest foreground coverage is 1.3 % (a knife)
@@ -312,10 +312,10 @@ def _image_network(folder: Path, settings: ReaderSettings) -> Reader:
 
 
 READERS: tuple[ReaderKind, ...] = (
-    ReaderKind("stage1_net.json", "a stage-1 image network (jax3dc.stage1_net), as bench/stage1_net.py "
+    ReaderKind("stage1_net.json", "a stage-1 image network (jax3dc.stage1_net), as recipes/stage1_net.py "
                "packages it", _image_network),
     ReaderKind("config.json", "a parameters language model: a Hugging Face folder, as the recipe "
-               "bench/stage1_model.py packages it", _language_model),
+               "recipes/stage1_model.py packages it", _language_model),
 )
 
 

@@ -1,4 +1,4 @@
-"""The shipped default model: a small Qwen3-VL trained from scratch by `bench/release_model.py`.
+"""The shipped default model: a small Qwen3-VL trained from scratch by `recipes/release_model.py`.
 
 Pretrained Qwen3-VL weights cannot be fetched at run time, so the package carries its own
 stage-2 structure model (bf16, under 24 MiB; SPEC §7). `predict`, `eval run` and `demo` use this
@@ -6,7 +6,7 @@ folder when no model folder is given. MODEL_CARD.md beside this file names its d
 training run and measured tables; release_summary.json holds the recipe's own figures.
 
 ``stage1/`` holds the shipped stage-1 image network (jax3dc.stage1_net: image I -> a factory's
-category and parameters; ``bench/stage1_net.py``), with its own MODEL_CARD.md: with it,
+category and parameters; ``recipes/stage1_net.py``), with its own MODEL_CARD.md: with it,
 ``predict IMAGE`` needs no ``--stage1``.
 """
 

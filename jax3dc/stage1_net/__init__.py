@@ -5,7 +5,7 @@ regressed in their range, Counts / Chances / Choices classified, decoded into th
 parameter text that the factory runs into parts with clean ids (issue 49). Small enough to train on
 two CPU cores in minutes and to ship beside the structure model within the package's 24 MiB (the
 shipped network's size is in its model card, ``jax3dc/release/stage1/MODEL_CARD.md``); the
-training recipe is ``bench/stage1_net.py``. A folder holds ``stage1_net.json`` (config and the
+training recipe is ``recipes/stage1_net.py``. A folder holds ``stage1_net.json`` (config and the
 schemas decoding needs) and ``model.safetensors``; ``load_reader(folder)`` gives ``image -> text``.
 """
 

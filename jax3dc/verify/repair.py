@@ -40,7 +40,7 @@ FLIPPED = "axis flipped"
 PIVOT = "pivot moved"
 SWAPPED = "type swapped"
 ALL_KINDS = frozenset({FLIPPED, PIVOT, SWAPPED})
-# Measured on 300 procedural test objects (bench/verified_decoding.py, best-of-8 winners, every kind
+# Measured on 300 procedural test objects (eval/evaluators/verified_decoding.py, best-of-8 winners, every kind
 # allowed): on the 37 objects where only pivots moved, successful joints went from 63 to 85; on the 5
 # with flips only, from 16 to 6, and type swaps from 1 to 0 (they undid right joints the verdict had
 # flagged), so by default only pivots move.

@@ -64,7 +64,7 @@ def choose(candidates: Sequence[Candidate], part_ids: Collection[int], parts: di
     verdicts = iter(check.many([s for s in structures if s is not None]))  # together: one MJX launch
     rows = [Row(False, rule, None, None, c.logprob, None) if structure is None else
             _row(c.logprob, next(verdicts)) for c, (structure, rule) in zip(candidates, parsed)]
-    ranked = sorted(range(len(rows)), key=lambda i: _rank(rows[i]), reverse=True)
+    ranked = sorted(range(len(rows)), key=lambda i: rank(rows[i]), reverse=True)
     return Choice(ranked[0], structures[ranked[0]], tuple(rows), _reason(rows, ranked))
 
 
@@ -80,7 +80,9 @@ def _row(logprob: float, verdict: Verdict) -> Row:
     return Row(True, None, verdict.ok, verdict.flagged, logprob, verdict)
 
 
-def _rank(row: Row) -> tuple:
+def rank(row: Row) -> tuple:
+    """A candidate's merit, higher first: it parses, then its verdict's merit, then its
+    log-likelihood. Public so that an evaluator picking among the first K rows ranks as ``choose``."""
     if not row.parsed:
         return (False, False, 0, row.logprob)
     return (True, *row.verdict.merit(), row.logprob)

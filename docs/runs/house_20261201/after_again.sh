@@ -1,6 +1,6 @@
 #!/bin/bash
 # Repeat the "after" side of the issue-48 check at any commit of main, in a fresh worktree:
-#   1. bench/physics_ground_truth.py --seeds 1 (all categories + the 9 PartNet-Mobility fixtures, C backend, 1 worker)
+#   1. eval/evaluators/physics_ground_truth.py --seeds 1 (all categories + the 9 PartNet-Mobility fixtures, C backend, 1 worker)
 #   2. jax3dc eval run on the test split of /tmp/house/build (204 records, made by the 6ac563d code)
 #      with --checkpoint /tmp/house/release2 (release 2 as shipped at 6ac563d), default decoding
 # then compares both with the "before" (6ac563d) outputs using the same comparison scripts.
@@ -24,7 +24,7 @@ echo "commit $(git rev-parse HEAD) -> $run"
 python3 -c 'import jax3dc; print("jax3dc from", jax3dc.__file__)' | tee "$run/import.txt"
 
 t=$(date +%s)
-nice -n 5 python3 bench/physics_ground_truth.py --seeds 1 --fixtures /work/shared/fixtures/partnet_mobility \
+nice -n 5 python3 -m eval.evaluate physics_ground_truth --seeds 1 --fixtures /work/shared/fixtures/partnet_mobility \
   --verdicts "$run/verdicts.jsonl" --details "$run/details.jsonl" 2>&1 | tee "$run/gt.log"
 echo "physics wall_s $(( $(date +%s) - t )) rc ${PIPESTATUS[0]}" | tee -a "$run/gt.log"
 

@@ -18,14 +18,14 @@ git -C /work/main worktree add --detach $H/after 8706565
 for s in before after; do (cd $H/$s && PYTHONPATH=$H/$s python3 -c 'import jax3dc; print(jax3dc.__file__)'); done
 
 # 2. physics ground-truth bench, both sides at once, one core each (run_gt.sh SIDE CPU:
-#    bench/physics_ground_truth.py --seeds 1 --fixtures /work/shared/fixtures/partnet_mobility
+#    eval/evaluators/physics_ground_truth.py --seeds 1 --fixtures /work/shared/fixtures/partnet_mobility
 #    --verdicts $H/SIDE_verdicts.jsonl --details $H/SIDE_details.jsonl, under taskset + nice -n 5).
 #    --fixtures is explicit: the default resolves to /tmp/house/shared/... in a worktree (absent).
 ./run_gt.sh before 0 > logs/gt_before.out 2>&1 &
 ./run_gt.sh after 1 > logs/gt_after.out 2>&1 &
 wait
 python3 scripts/compare_verdicts_exact.py before_verdicts.jsonl after_verdicts.jsonl --digests verdict_digests.tsv | tee verdicts_compare.txt
-python3 after/bench/compare_verdicts.py before_verdicts.jsonl after_verdicts.jsonl | tee verdicts_compare_repo_tool.txt
+python3 after/scripts/compare_verdicts.py before_verdicts.jsonl after_verdicts.jsonl | tee verdicts_compare_repo_tool.txt
 cmp before_details.jsonl after_details.jsonl && echo "before_details.jsonl vs after_details.jsonl: byte-identical (cmp), $(wc -l < before_details.jsonl) lines, sha256 $(sha256sum < before_details.jsonl | cut -c1-64)" | tee details_compare.txt
 sed 's/\r/\n/g' before_gt.log | grep -v "objects:" > before_gt_summary.txt
 sed 's/\r/\n/g' after_gt.log | grep -v "objects:" > after_gt_summary.txt

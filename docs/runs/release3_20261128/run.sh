@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Release 3 candidates on one GPU host (16 cores), three recipes trained side by side on one GPU from
 # the same procedural build: box-frame pivots with the real pool at 0.3 and 0.5 of examples, and
-# absolute pivots at 0.3 (the ablation). Real shards: bench/real_split.py's train part and held-out
+# absolute pivots at 0.3 (the ablation). Real shards: scripts/real_split.py's train part and held-out
 # fifth, imported on a CPU machine:
-#   jax3dc data import $(python3 -m bench.real_split ../shared/real_train/partnet_mobility --print train) \
+#   jax3dc data import $(python3 scripts/real_split.py ../shared/real_train/partnet_mobility --print train) \
 #       --out .carry/real_train --split train --views 4 --augment --size 224 --workers 2
-#   jax3dc data import $(python3 -m bench.real_split ../shared/real_train/partnet_mobility --print heldout) \
+#   jax3dc data import $(python3 scripts/real_split.py ../shared/real_train/partnet_mobility --print heldout) \
 #       --out .carry/real_heldout --split test --views 2 --augment --size 224 --workers 2
 #   jax3dc data import ../shared/fixtures/partnet_mobility/*/ --out .carry/fixtures --split test --views 2 --augment --size 224
 # Usage: run.sh start | wait MINUTES | pack OUTDIR
@@ -24,14 +24,14 @@ start)
     IFS=: read name frame weight <<< "$run"
     mkdir -p $R/$name && ln -sfn $R/data $R/$name/data
     extra=""; [ "$name" = box3 ] && extra="--compare jax3dc/release"
-    setsid nohup python3 -m bench.release_model --out $R/$name $common --pivot-frame $frame --real-weight $weight \
+    setsid nohup python3 -m recipes.release_model --out $R/$name $common --pivot-frame $frame --real-weight $weight \
         $extra > $R/$name.log 2>&1 < /dev/null &
   done
   sleep 5; tail -n 2 $R/*.log ;;
 wait)
   end=$(( $(date +%s) + ${2:-9} * 60 ))
   while [ $(date +%s) -lt $end ]; do
-    if ! pgrep -f bench.release_model >/dev/null; then echo "all runs ended"; break; fi
+    if ! pgrep -f recipes.release_model >/dev/null; then echo "all runs ended"; break; fi
     sleep 20
   done
   for f in $R/*.log; do echo "== $f"; grep -v "^\s*$" $f | tail -n 4 | cut -c1-400; done

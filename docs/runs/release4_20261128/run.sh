@@ -2,7 +2,7 @@
 # Release 4 candidates on one GPU host (16 cores): three stage-2 recipes trained side by side on one
 # GPU from one procedural build (8,500 objects, 1,500 scenes), and the stage-1 image network beside
 # them. Real shards are imported on a CPU machine (the pool cannot travel) and carried:
-#   v1 (release 3's): jax3dc data import $(python3 -m bench.real_split ../shared/real_train/partnet_mobility --print train) \
+#   v1 (release 3's): jax3dc data import $(python3 scripts/real_split.py ../shared/real_train/partnet_mobility --print train) \
 #       --out .carry/real_train --split train --views 4 --augment --size 224 --workers 2
 #   v2: the same objects with --views 8 --augment --mirror --palette-per-view (every view of each
 #       object's mirror image too, and S's colours permuted per view) -> .carry/real_train_v2
@@ -36,18 +36,18 @@ start)  # three stage-2 candidates once the procedural build is complete; stage 
     IFS=: read name real weight <<< "$run"
     mkdir -p $R/$name && ln -sfn $R/data $R/$name/data
     extra=""; [ "$name" = v2w3 ] && extra="--compare jax3dc/release"
-    setsid nohup python3 -m bench.release_model --out $R/$name $common --real $R/carry/$real --real-weight $weight \
+    setsid nohup python3 -m recipes.release_model --out $R/$name $common --real $R/carry/$real --real-weight $weight \
         $extra > $R/$name.log 2>&1 < /dev/null &
   done
   ( while ! grep -q built $R/build.log 2>/dev/null; do sleep 5; done
-    XLA_PYTHON_CLIENT_MEM_FRACTION=0.12 python3 -m bench.stage1_net --out $R/s1 --data $R/s1/data-0 $R/s1/data-1 \
+    XLA_PYTHON_CLIENT_MEM_FRACTION=0.12 python3 -m recipes.stage1_net --out $R/s1 --data $R/s1/data-0 $R/s1/data-1 \
         --image-size 128 --widths 48 96 192 256 --hidden 384 --batch 128 --steps 40000 --minutes ${S1_MIN:-13} \
         > $R/s1.log 2>&1 ) < /dev/null > /dev/null 2>&1 &
   disown; sleep 5; tail -n 2 $R/*.log ;;
 wait)
   end=$(( $(date +%s) + ${2:-9} * 60 ))
   while [ $(date +%s) -lt $end ]; do
-    if ! pgrep -f "bench.release_model|bench.stage1_net" >/dev/null; then echo "all runs ended"; break; fi
+    if ! pgrep -f "recipes.release_model|recipes.stage1_net" >/dev/null; then echo "all runs ended"; break; fi
     sleep 15
   done
   for f in $R/*.log; do echo "== $f"; grep -v "^\s*$" $f | tail -n 3 | cut -c1-300; done

@@ -2,7 +2,7 @@
 # Release 5 candidates on one GPU host (16 cores): three stage-2 recipes trained side by side on one
 # GPU from one procedural build with twice release 4's scenes (3,000), differing only in the look of
 # the real training images (RUNS="v23:$c/real_train_v2,$c/real_train_v3" adds both looks at once). Real shards are imported on a CPU machine (the pool cannot travel):
-#   TR=$(python3 -m bench.real_split ../shared/real_train/partnet_mobility --print train)
+#   TR=$(python3 scripts/real_split.py ../shared/real_train/partnet_mobility --print train)
 #   v2 (release 4's): jax3dc data import $TR --out .carry/real_train_v2 --split train --views 8 --augment \
 #       --mirror --palette-per-view --size 224
 #   v3: the same with --appearance varied (random lights, sky / floor, jittered part colours and textures,
@@ -73,14 +73,14 @@ start)
     IFS=: read name real <<< "$run"
     mkdir -p $R/$name && ln -sfn $R/data $R/$name/data
     extra=""; [ "$name" = v2 ] && extra="--compare jax3dc/release"
-    setsid nohup python3 -m bench.release_model --out $R/$name $common --real $real --real-weight 0.3 \
+    setsid nohup python3 -m recipes.release_model --out $R/$name $common --real $real --real-weight 0.3 \
         $extra > $R/$name.log 2>&1 < /dev/null &
   done
   sleep 5; tail -n 2 $R/*.log ;;
 wait)
   end=$(( $(date +%s) + ${2:-9} * 60 ))
   while [ $(date +%s) -lt $end ]; do
-    if ! pgrep -f "bench.release_model" >/dev/null; then echo "all runs ended"; break; fi
+    if ! pgrep -f "recipes.release_model" >/dev/null; then echo "all runs ended"; break; fi
     sleep 15
   done
   for f in $R/*.log; do echo "== $f"; grep -v "^\s*$" $f | tail -n 3 | cut -c1-300; done

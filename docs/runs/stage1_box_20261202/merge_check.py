@@ -1,14 +1,14 @@
 import numpy as np
 from pathlib import Path
 from collections import defaultdict
-from bench.stage1_net import _load_split_images
+from recipes.stage1_net import load_split_images
 from eval.metrics.parameters import score_parameters, summarise
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.stage1_net import load_network, forward
 from jax3dc.stage1_net.folder import decode_text
 folders = [Path(f"runs/s1r2/data-{i}") for i in range(4)]
 r4 = load_network("jax3dc/release/stage1"); d = load_network("runs/s1b/d/stage1")
-keys, images, texts, builds = _load_split_images(folders, 128, only="test")["test"]
+keys, images, texts, builds = load_split_images(folders, 128, only="test")["test"]
 def outs(net):
     o = [forward(net.model, np.asarray(images[lo:lo+64], np.float32) / 255.0) for lo in range(0, len(keys), 64)]
     return [np.concatenate([np.asarray(x[i]) for x in o]) for i in range(3)]

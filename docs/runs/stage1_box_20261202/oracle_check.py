@@ -1,7 +1,7 @@
 """Where matched IoU is lost: predicted vs hybrids with the reference's numbers or discrete values."""
 import json, sys, numpy as np
 from pathlib import Path
-from bench.stage1_net import _load_split_images
+from recipes.stage1_net import load_split_images
 from eval.metrics.parameters import score_parameters, summarise
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.parameters import Parameters, parse_parameters, format_parameters
@@ -9,7 +9,7 @@ from jax3dc.parameters.schema import Number
 from jax3dc.stage1_net import load_network
 folders = [Path(f"runs/s1r2/data-{i}") for i in range(4)]
 net = load_network("jax3dc/release/stage1")
-keys, images, texts, builds = _load_split_images(folders, 128, only="test")["test"]
+keys, images, texts, builds = load_split_images(folders, 128, only="test")["test"]
 pred = []
 for lo in range(0, len(keys), 64):
     pred += net.read(np.asarray(images[lo:lo+64], np.float32) / 255.0)

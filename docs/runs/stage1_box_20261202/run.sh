@@ -6,7 +6,7 @@
 #   a  from release 4, the plain number loss (more data alone)
 #   b  from release 4, --number-weight 1 --box-weight 4 (train.stage1_box_metric)
 #   c  from scratch (release 3's shape), the same loss as b
-# The box metrics of builds 0-3 come computed (.s1box/metric.jsonl.gz: `python3 -m bench.stage1_net
+# The box metrics of builds 0-3 come computed (.s1box/metric.jsonl.gz: `python3 -m recipes.stage1_net
 # --data runs/s1r2/data-0 ... data-3 --metrics-only --box-cache .s1box/metric.jsonl --box-workers 2`); the
 # host computes the new builds' (`--metrics-only`, 15 processes) while a trains.
 # Host setup (wheels, entry points, EGL): docs/runs/release5_20261201/run.sh setup.
@@ -24,7 +24,7 @@ snapshot() {  # the host's tree may be rewritten while work runs: long-lived pro
   cd $R/src
 }
 train() {  # train NAME ARGS... : one candidate, detached (setsid) so it outlives the launching shell
-  setsid nohup python3 -m bench.stage1_net --out $R/$1 --data $data --image-size 128 --batch 256 --steps 60000 \
+  setsid nohup python3 -m recipes.stage1_net --out $R/$1 --data $data --image-size 128 --batch 256 --steps 60000 \
       --minutes ${MINUTES:-8} --hidden 512 --eval-limit 200 "${@:2}" > $R/$1.log 2>&1 < /dev/null &
 }
 case "$1" in
@@ -42,7 +42,7 @@ here)
   data=$(for b in $BUILDS; do echo -n "$R/data-${b%%:*} "; done)
   export XLA_PYTHON_CLIENT_MEM_FRACTION=0.28
   train a --init jax3dc/release/stage1 --lr 1e-3
-  python3 -m bench.stage1_net --out $R/m --data $data --metrics-only --box-cache $R/metric.jsonl --box-workers 15 \
+  python3 -m recipes.stage1_net --out $R/m --data $data --metrics-only --box-cache $R/metric.jsonl --box-workers 15 \
       >> $R/build.log 2>&1
   cp $R/metric.jsonl $R/metric_c.jsonl  # each candidate appends to its own copy (nothing is left to compute)
   train b --init jax3dc/release/stage1 --lr 1e-3 --number-weight 1 --box-weight 4 --box-cache $R/metric.jsonl
@@ -56,7 +56,7 @@ more)
 wait)
   end=$(( $(date +%s) + ${2:-9} * 60 ))
   while [ $(date +%s) -lt $end ]; do
-    grep -q "all started" $R/build.log 2>/dev/null && ! pgrep -f "bench.stage1_net" >/dev/null && { echo "all ended"; break; }
+    grep -q "all started" $R/build.log 2>/dev/null && ! pgrep -f "recipes.stage1_net" >/dev/null && { echo "all ended"; break; }
     sleep 10
   done
   tail -n 4 $R/build.log | cut -c1-300

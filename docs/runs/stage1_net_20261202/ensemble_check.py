@@ -1,14 +1,14 @@
 """Candidates averaged: python3 ensemble_check.py FOLDER_A FOLDER_B (test records of runs/s1r2/data-0..3)."""
 import sys, numpy as np, jax
 from pathlib import Path
-from bench.stage1_net import _load_split_images
+from recipes.stage1_net import load_split_images
 from eval.metrics.parameters import score_parameters, summarise
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.stage1_net import load_network, forward
 from jax3dc.stage1_net.folder import decode_text
 folders = [Path(f"runs/s1r2/data-{i}") for i in range(4)]
 nets = [load_network(f) for f in sys.argv[1:]]
-keys, images, texts, builds = _load_split_images(folders, 128, only="test")["test"]
+keys, images, texts, builds = load_split_images(folders, 128, only="test")["test"]
 outs = []
 for net in nets:
     cat, num, disc = [], [], []

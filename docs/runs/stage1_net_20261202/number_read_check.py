@@ -2,14 +2,14 @@
 import numpy as np
 from collections import defaultdict
 from pathlib import Path
-from bench.stage1_net import _load_split_images
+from recipes.stage1_net import load_split_images
 from jax3dc.factories.registry import SCHEMAS
 from jax3dc.stage1_net import load_network, forward, OutputLayout
 from train.stage1_net import targets
 folders = [Path(f"runs/s1r2/data-{i}") for i in range(4)]
 net = load_network("jax3dc/release/stage1")
 layout = net.layout
-sp = _load_split_images(folders, 128)
+sp = load_split_images(folders, 128)
 train = targets(sp["train"][1], sp["train"][2], layout, SCHEMAS)
 test = targets(sp["test"][1], sp["test"][2], layout, SCHEMAS)
 pred = np.concatenate([np.clip(np.asarray(forward(net.model, test.images[lo:lo+64].astype(np.float32) / 255.0)[1]), 0, 1) for lo in range(0, len(test), 64)])

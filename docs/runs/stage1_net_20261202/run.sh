@@ -2,7 +2,7 @@
 # Stage-1 image network, release 3 candidates, on one GPU host (16 cores): release 2's four builds
 # again (same seeds and counts, so its 1,013 test objects are among the test objects) plus four new
 # builds (seeds 4-7), then two networks trained side by side on the one GPU, each scored on every
-# test record beside the shipped release 2 (`bench.stage1_net --compare jax3dc/release/stage1`).
+# test record beside the shipped release 2 (`recipes.stage1_net --compare jax3dc/release/stage1`).
 # Host setup (wheels, entry points, EGL) is release 5's: docs/runs/release5_20261201/run.sh setup.
 # Usage: [NEW=N EXTRA=K VIEWS=V MINUTES=M] run.sh all | build | start | wait MINUTES | pack OUTDIR
 # (release 3: NEW=3000 EXTRA=4 VIEWS=1 MINUTES=6.5)
@@ -41,13 +41,13 @@ start)  # run.sh start : waits for the builds, then trains both candidates at on
   common="--data $data --image-size 128 --batch 256 --lr 2e-3 --steps 60000 --minutes ${MINUTES:-8} --hidden 512
           --compare jax3dc/release/stage1"
   export XLA_PYTHON_CLIENT_MEM_FRACTION=0.4
-  setsid nohup python3 -m bench.stage1_net --out $R/a $common --widths 32 64 128 256 --blocks 2 > $R/a.log 2>&1 < /dev/null &
-  setsid nohup python3 -m bench.stage1_net --out $R/b $common --widths 48 96 192 384 --blocks 1 > $R/b.log 2>&1 < /dev/null &
+  setsid nohup python3 -m recipes.stage1_net --out $R/a $common --widths 32 64 128 256 --blocks 2 > $R/a.log 2>&1 < /dev/null &
+  setsid nohup python3 -m recipes.stage1_net --out $R/b $common --widths 48 96 192 384 --blocks 1 > $R/b.log 2>&1 < /dev/null &
   sleep 2; echo started ;;
 wait)
   end=$(( $(date +%s) + ${2:-9} * 60 ))
   while [ $(date +%s) -lt $end ]; do
-    pgrep -f "bench.stage1_net|data build" >/dev/null || { echo "all ended"; break; }
+    pgrep -f "recipes.stage1_net|data build" >/dev/null || { echo "all ended"; break; }
     sleep 10
   done
   tail -n 3 $R/build.log; for f in $R/a.log $R/b.log; do [ -f $f ] && { echo "== $f"; tail -n 4 $f | cut -c1-400; }; done

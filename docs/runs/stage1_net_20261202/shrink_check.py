@@ -1,7 +1,7 @@
 """Numbers pulled toward the train mean by a factor per output fitted on val, then scored on test."""
 import numpy as np
 from pathlib import Path
-from bench.stage1_net import _load_split_images
+from recipes.stage1_net import load_split_images
 from eval.metrics.parameters import score_parameters, summarise
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.stage1_net import load_network, forward
@@ -9,7 +9,7 @@ from jax3dc.stage1_net.folder import decode_text
 from train.stage1_net import targets
 folders = [Path(f"runs/s1r2/data-{i}") for i in range(4)]
 net = load_network("jax3dc/release/stage1"); layout = net.layout
-sp = _load_split_images(folders, 128)
+sp = load_split_images(folders, 128)
 T = {k: targets(v[1], v[2], layout, SCHEMAS) for k, v in sp.items()}
 def outputs(t):
     outs = [forward(net.model, t.images[lo:lo+64].astype(np.float32) / 255.0) for lo in range(0, len(t), 64)]

@@ -7,7 +7,7 @@ those objects are built: the split is a hash of each object id and a build's rec
 on the object, the build seed, the size and the look, so building the first --limit objects of
 the test split alone gives the same records as the full build's first test shards.
 
-    python3 -m bench.appearance_shift --work /tmp/appearance_shift [--limit 100] [--samples 24]
+    python3 -m eval.evaluate appearance_shift --work /tmp/appearance_shift [--limit 100] [--samples 24]
 
 Writes WORK/summary.json and WORK/tables.md (Table 1 of both renders, the success gap, seconds per
 Cycles image) and prints them. A third row scores the same records with I replaced by a black

@@ -1,6 +1,6 @@
 """The release benchmark on objects never trained on: real held-out objects beside procedural ones.
 
-    python3 -m bench.real_objects --model runs/r3/release --compare jax3dc/release \\
+    python3 -m eval.evaluate real_objects --model runs/r3/release --compare jax3dc/release \\
         --heldout .carry/real_heldout --fixtures .carry/fixtures --procedural runs/r3/data --out runs/r3/bench
 
 1. sets      the test records of each source, by kind — plain, split variant, merge variant, scene
@@ -240,6 +240,7 @@ def report(results: Mapping[str, Mapping[str, dict]]) -> str:
 
 
 def run(a: argparse.Namespace) -> dict:
+    os.environ.setdefault("MUJOCO_GL", "egl")  # the overlays of `eval run` render headless
     out = Path(a.out)
     sources = {name: Path(p) for name, p in (("heldout", a.heldout), ("heldout_varied", a.heldout_varied),
                                               ("fixtures", a.fixtures), ("fixtures_varied", a.fixtures_varied),
@@ -273,7 +274,7 @@ def main(argv: Iterable[str] | None = None) -> dict:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--model", default="jax3dc/release", help="model folder to benchmark")
     p.add_argument("--compare", default="", help="another model folder scored on the same records (the shipped one)")
-    p.add_argument("--heldout", default="", help="shards of the held-out fifth of the real pool (bench.real_split)")
+    p.add_argument("--heldout", default="", help="shards of the held-out fifth of the real pool (scripts/real_split.py)")
     p.add_argument("--fixtures", default="", help="shards of the 9 real test fixtures")
     p.add_argument("--heldout-varied", default="", help="the held-out fifth imported in the varied look "
                    "(`data import --appearance varied`): the same objects, to measure what the look changes")
@@ -290,5 +291,4 @@ def main(argv: Iterable[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    os.environ.setdefault("MUJOCO_GL", "egl")
     main()

@@ -1,7 +1,7 @@
 """The release recipe: data, tokenizer, training, evaluation and the packaged default model.
 
 Run on a GPU host (one GPU or all GPUs of one host), one command that may be repeated:
-    python3 -m bench.release_model --out runs/release --budget-min 9.3 [--real SHARDS] [--fixtures SHARDS]
+    python3 -m recipes.release_model --out runs/release --budget-min 9.3 [--real SHARDS] [--fixtures SHARDS]
 Each call does what is left, in order, and stops before --budget-min minutes have passed, so
 a host whose commands are cut at 10 minutes still gets there in a few calls (training resumes
 from its orbax checkpoint in OUT/train):
@@ -11,7 +11,7 @@ from its orbax checkpoint in OUT/train):
                vocabulary, and so its embedding table, stays small enough to ship)
   3. train     `jax3dc train --init release` from scratch, every parameter trained, the
                procedural build mixed with --real (imported real objects, train split only)
-  4. evaluate  `bench.real_objects`: the procedural test split (plain, split and merge variants,
+  4. evaluate  `eval.evaluators.real_objects`: the procedural test split (plain, split and merge variants,
                scenes), --heldout and --fixtures (real objects kept out of training), each beside
                the no-training baselines and --compare; with --code-weight, `jax3dc eval run
                --task code` on the procedural test split too
@@ -35,27 +35,12 @@ import time
 from pathlib import Path
 from typing import Sequence
 
-import jax.numpy as jnp
-
-from bench import real_objects
-from jax3dc.cli import main as jax3dc
-from jax3dc.model.params import load_pretrained, save_pretrained
+from eval.evaluators import real_objects
+from recipes.steps import call, last_step, package_weights, set_flags
 from train.model_state import PRESETS
 
 COLUMNS = ("parse", "parent_acc", "edge_f1", "presence_f1", "type_acc", "axis_acc", "pos_err", "range_iou",
            "success", "sym_f1", "inst_f1", "fail_type", "fail_axis", "fail_origin", "fail_limit")
-SHARD_BYTES = 12 * 2**20  # files coming back from a device host must stay under 16 MiB each
-
-
-def _call(argv: list[str]) -> None:
-    print(f"[release] jax3dc {' '.join(argv)}", flush=True)
-    code = jax3dc(argv)
-    if code != 0:
-        raise SystemExit(f"`jax3dc {' '.join(argv)}` failed with exit code {code}")
-
-
-def _sets(overrides: list[str]) -> list[str]:
-    return [x for o in overrides for x in ("--set", o)]
 
 
 def training_mix(data: str, real: str, real_weight: float, code_weight: float,
@@ -86,14 +71,6 @@ def mix_entry(text: str) -> tuple[str, float]:
     return folder, value
 
 
-def _last_step(train_dir: Path) -> int:
-    log = train_dir / "metrics.jsonl"
-    if not log.exists():
-        return 0
-    steps = [json.loads(line).get("step", 0) for line in log.read_text().splitlines() if line.strip()]
-    return max(steps, default=0)
-
-
 def _row(metrics: dict) -> dict:
     return {k: metrics.get(k) for k in COLUMNS}
 
@@ -101,27 +78,17 @@ def _row(metrics: dict) -> dict:
 def _evaluate_code(model: Path, data: str, out: Path, limit: int, batch: int, max_new: int) -> dict:
     """eval run --task code: part programs from image I alone, run and compared with the records' own."""
     if not (out / "metrics.json").exists():
-        _call(["eval", "run", "--task", "code", "--checkpoint", str(model), "--data", data, "--limit", str(limit),
+        call(["eval", "run", "--task", "code", "--checkpoint", str(model), "--data", data, "--limit", str(limit),
                "--batch-size", str(batch), "--bucket", "256", "--max-new-tokens", str(max_new), "--out", str(out)])
     return json.loads((out / "metrics.json").read_text())
 
 
-def _package(train_dir: Path, out: Path) -> None:
-    """bf16 weights, sharded, plus tokenizer and processor files of the run."""
-    hf = train_dir / "hf"
-    model, config = load_pretrained(hf, dtype=jnp.float32)
-    out.mkdir(parents=True, exist_ok=True)
-    save_pretrained(model, config, out, dtype=jnp.bfloat16, max_shard_bytes=SHARD_BYTES)
-    for f in hf.iterdir():
-        if f.suffix != ".safetensors" and f.name not in ("config.json", "model.safetensors.index.json"):
-            shutil.copy2(f, out / f.name)
-
-
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
+    """Run the recipe's steps left to do with the flags of ``argv`` (the command line's by default)."""
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/release")
     p.add_argument("--budget-min", type=float, default=9.3, help="stop this call before this many minutes")
-    p.add_argument("--init", default="release", help="preset (random weights; bench/size_sweep.py compares them), or an "
+    p.add_argument("--init", default="release", help="preset (random weights; eval.evaluators.size_sweep compares them), or an "
                    "earlier release folder to continue from")
     p.add_argument("--tokenizer", default="", help="a folder with tokenizer.json to use instead of learning one")
     p.add_argument("--objects", type=int, default=4000)
@@ -138,8 +105,8 @@ def main() -> None:
     p.add_argument("--mix", type=mix_entry, action="append", default=[], metavar="DIR=SHARE",
                    help="more training shards at their own share of examples (e.g. objects composed from real "
                    "parts); repeatable")
-    p.add_argument("--heldout", default="", help="shards of the real pool's held-out fifth (bench.real_split), never "
-                   "trained on, scored by bench.real_objects")
+    p.add_argument("--heldout", default="", help="shards of the real pool's held-out fifth (scripts/real_split.py), never "
+                   "trained on, scored by eval.evaluators.real_objects")
     p.add_argument("--pivot-frame", default="box", choices=("box", "absolute"),
                    help="how the model writes joint pivots (jax3dc/structure/box_frame.py); ignored with --init DIR, "
                    "which keeps that model's")
@@ -148,7 +115,7 @@ def main() -> None:
     p.add_argument("--code-eval-records", type=int, default=100, help="procedural test records for the code task")
     p.add_argument("--compare", default="", help="an earlier release folder scored on the same records")
     p.add_argument("--fixtures", default="", help="shards of real objects never trained on, scored per object")
-    p.add_argument("--heldout-varied", default="", help="--heldout's objects in the varied look (bench.real_objects)")
+    p.add_argument("--heldout-varied", default="", help="--heldout's objects in the varied look (eval.evaluators.real_objects)")
     p.add_argument("--fixtures-varied", default="", help="--fixtures' objects in the varied look")
     p.add_argument("--steps", type=int, default=6000)
     p.add_argument("--batch", type=int, default=32)
@@ -159,7 +126,7 @@ def main() -> None:
     p.add_argument("--max-new-tokens", type=int, default=2048)
     p.add_argument("--reserve-min", type=float, default=2.5, help="minutes kept for evaluation and packaging")
     p.add_argument("--set", action="append", default=[], help="extra `jax3dc train --set` overrides")
-    a = p.parse_args()
+    a = p.parse_args(argv)
     start = time.perf_counter()
 
     def left() -> float:
@@ -175,7 +142,7 @@ def main() -> None:
         t = time.perf_counter()
         build = ["data", "build", "--out", str(data), "--objects", str(a.objects), "--scenes", str(a.scenes),
                  "--views", str(a.views), *(["--augment"] if a.augment else []), "--size", str(a.image_size), "--workers", workers, "--quiet"]
-        _call(build + (["--appearance", a.appearance] if a.appearance else []))
+        call(build + (["--appearance", a.appearance] if a.appearance else []))
         print(f"[release] data: {time.perf_counter() - t:.0f} s", flush=True)
 
     init_dir = None if a.init in PRESETS else Path(a.init)
@@ -183,9 +150,9 @@ def main() -> None:
         tok = Path(a.tokenizer)
     if init_dir is None and not (tok / "tokenizer.json").exists():
         sources = [x for d in [str(data), *filter(None, a.real.split(","))] for x in ("--data", d)]
-        _call(["data", "tokenizer", *sources, "--vocab-size", str(a.vocab), "--out", str(tok), "--quiet"])
+        call(["data", "tokenizer", *sources, "--vocab-size", str(a.vocab), "--out", str(tok), "--quiet"])
 
-    done = _last_step(train_dir) >= a.steps and (train_dir / "hf" / "config.json").exists()
+    done = last_step(train_dir) >= a.steps and (train_dir / "hf" / "config.json").exists()
     if not done:
         minutes = left() - a.reserve_min
         if minutes < 1:
@@ -201,14 +168,14 @@ def main() -> None:
         if len(datasets) > 1:
             overrides.append("data_weights=" + ",".join(f"{w:g}" for w in weights))
             overrides.append("data_tasks=" + ",".join(tasks))
-        _call(["train", "--init", str(init_dir or a.init), "--output-dir", str(train_dir), *_sets(overrides)])
-        if _last_step(train_dir) < a.steps:
-            print(f"[release] trained to step {_last_step(train_dir)} of {a.steps}; run again to go on", flush=True)
+        call(["train", "--init", str(init_dir or a.init), "--output-dir", str(train_dir), *set_flags(overrides)])
+        if last_step(train_dir) < a.steps:
+            print(f"[release] trained to step {last_step(train_dir)} of {a.steps}; run again to go on", flush=True)
             return
 
     release = out / "release"
     if not (release / "config.json").exists():
-        _package(train_dir, release)
+        package_weights(train_dir, release)
     bench = real_objects.main(["--model", str(release), *(["--compare", a.compare] if a.compare else []),
                                *(["--heldout", a.heldout] if a.heldout else []),
                                *(["--fixtures", a.fixtures] if a.fixtures else []),
@@ -222,7 +189,7 @@ def main() -> None:
         code = _evaluate_code(release, str(data), out / "eval_code", a.code_eval_records, a.eval_batch, 2048)
     steps = [json.loads(line) for line in (train_dir / "metrics.jsonl").read_text().splitlines() if line.strip()]
     train_rows = [r for r in steps if r.get("kind") == "train"]
-    summary = {"args": vars(a), "final_step": _last_step(train_dir), "last_train": train_rows[-1] if train_rows else None,
+    summary = {"args": vars(a), "final_step": last_step(train_dir), "last_train": train_rows[-1] if train_rows else None,
                "results": {name: {system: {**_row(r["metrics"]), "hinge_edge_acc": r.get("hinge_edge_acc"),
                                            "counts": r["metrics"]["counts"]} for system, r in systems.items()}
                            for name, systems in bench.items()}, "code": code}

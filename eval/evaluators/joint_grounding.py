@@ -1,12 +1,12 @@
 """Joint grounding measured on predictions already made: each step on and off, every benchmark set.
 
-    python3 -m bench.joint_grounding --bench runs/bench --out runs/grounding
+    python3 -m eval.evaluate joint_grounding --bench runs/bench --out runs/grounding
 
-``--bench`` is a folder that ``bench.real_objects`` wrote (its ``sets/<source>_<kind>/`` shards and
+``--bench`` is a folder that ``eval.evaluators.real_objects`` wrote (its ``sets/<source>_<kind>/`` shards and
 ``model/predictions.jsonl`` + ``model/references.jsonl``). Each variant rewrites every raw prediction
 through ``jax3dc.grounding.ground_text`` — the function the sampler applies when decoding with
 grounding on — against the legend boxes of the record's own prompt, and the result is scored per set
-as ``bench.real_objects`` scores it (records without a prediction yet are left out and counted).
+as ``eval.evaluators.real_objects`` scores it (records without a prediction yet are left out and counted).
 Writes OUT/summary.json, OUT/summary.md and, per variant, OUT/<variant>.jsonl (predictions in the
 format ``jax3dc eval run --predictions`` reads; the file name is the variant's, e.g.
 ``default_ground_joints.jsonl``).
@@ -21,7 +21,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Iterable
 
-from bench.real_objects import score, set_keys
+from eval.evaluators.real_objects import score, set_keys
 from eval.metrics.cases import load_predictions, load_references
 from jax3dc.grounding import Grounding, JointPrior, ground_text, shipped_prior
 from jax3dc.prompt import legend_boxes
@@ -57,7 +57,7 @@ def slug(variant: str) -> str:
 
 def main(argv: Iterable[str] | None = None) -> dict:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--bench", required=True, help="a bench.real_objects output folder")
+    p.add_argument("--bench", required=True, help="a eval.evaluators.real_objects output folder")
     p.add_argument("--out", required=True)
     p.add_argument("--prior", default="", help="a joint prior JSON (default: the shipped one)")
     p.add_argument("--sets", nargs="*", default=None, help="set names to score (default: every set)")

@@ -4,7 +4,7 @@ Prints, over the objects both files hold: joints whose ok flag agrees, joints wh
 (a reason's text up to " at ", the joint value being where a sweep first found it), the objects'
 verdicts, each disagreement, and each backend's seconds per object (MJX's include its compiles).
 
-python3 bench/compare_verdicts.py c.jsonl mjx.jsonl
+python3 scripts/compare_verdicts.py c.jsonl mjx.jsonl
 """
 
 from __future__ import annotations

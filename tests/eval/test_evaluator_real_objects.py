@@ -1,10 +1,10 @@
-"""bench.real_objects' breakdowns: reference joints right beside the paper's success, per group."""
+"""eval.evaluators.real_objects' breakdowns: reference joints right beside the paper's success, per group."""
 
 from types import SimpleNamespace
 
 import pytest
 
-from bench.real_objects import _right, breakdown
+from eval.evaluators.real_objects import _right, breakdown
 
 
 def case(key: str, joints: int) -> SimpleNamespace:
@@ -26,7 +26,7 @@ def test_breakdown_counts_reference_joints_and_matched_ones_apart():
 def test_sets_of_one_object_in_two_looks_get_keys_of_their_own(tmp_path):
     """The held-out objects in the plain and the varied look share record keys; their sets must not,
     or one `eval run` over every set refuses them."""
-    from bench.real_objects import write_sets
+    from eval.evaluators.real_objects import write_sets
     from data_pipeline.build import BuildConfig, factory_sources, run_build
     from eval.records import read_records
     from data_pipeline.shards import shard_paths

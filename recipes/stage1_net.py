@@ -1,6 +1,6 @@
 """The stage-1 image network's recipe on CPU (issue 49): build, train, package, score on test.
 
-    nice -n 10 python3 -m bench.stage1_net --out runs/stage1_net
+    nice -n 10 python3 -m recipes.stage1_net --out runs/stage1_net
 
   1. data      `jax3dc data build` per --objects count (build i: OUT/data-i, build seed i), one
                view, varied appearance, no scenes, no augmentation (records carry their parameter
@@ -31,23 +31,24 @@ import json
 import shutil
 import time
 from collections import defaultdict
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 from flax import nnx
 
-from bench.release_model import _call
 from data_pipeline.shards import read_dataset
 from eval.metrics.parameters import score_parameters, summarise
 from eval.parameters_run import table
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.stage1_net import OutputLayout, Stage1Net, Stage1NetConfig, load_network, network_image, save_network
 from train.stage1_box_metric import box_metrics
+from recipes.steps import call
 from train.stage1_net import TrainConfig, accuracy, targets, train
 
 
-def _load_split_images(folders: list[Path], size: int, only: str | None = None
+def load_split_images(folders: list[Path], size: int, only: str | None = None
                        ) -> dict[str, tuple[list[str], list[np.ndarray], list[str], list[int]]]:
     """split -> (keys, network images as uint8, parameter texts, build index) of the records that
     carry parameters (of split ``only`` when given)."""
@@ -96,7 +97,7 @@ def score_folders(networks: list[str], folders: list[Path], out: Path) -> dict:
         network = load_network(folder)
         size = network.model.config.image_size
         if size not in cache:
-            cache[size] = _load_split_images(folders, size, only="test")["test"]
+            cache[size] = load_split_images(folders, size, only="test")["test"]
         keys, images, texts, builds = cache[size]
         scores, _, read_s = _score(network, keys, images, texts)
         rows[folder] = {"test": summarise(scores), "reader_seconds_per_image": round(read_s, 4),
@@ -106,7 +107,7 @@ def score_folders(networks: list[str], folders: list[Path], out: Path) -> dict:
     return rows
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/stage1_net")
     p.add_argument("--data", nargs="+", default=[], help="built datasets to use instead of building OUT/data")
@@ -137,7 +138,7 @@ def main() -> None:
     p.add_argument("--eval-limit", type=int, default=0, help="test objects to score (0: all)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--release", default="", help="also copy the packaged folder here")
-    a = p.parse_args()
+    a = p.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     folders = [Path(d) for d in a.data] or [out / f"data-{seed}" for seed in range(len(a.objects))]
@@ -147,7 +148,7 @@ def main() -> None:
     for seed, (folder, objects) in enumerate(zip(folders, a.objects if not a.data else [])):
         manifest = folder / "manifest.json"
         if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
-            _call(["data", "build", "--out", str(folder), "--objects", str(objects), "--seed", str(seed), "--scenes", "0",
+            call(["data", "build", "--out", str(folder), "--objects", str(objects), "--seed", str(seed), "--scenes", "0",
                    "--views", "1", "--size", str(a.render_size), "--workers", str(a.workers), "--appearance", "varied",
                    "--quiet"])
 
@@ -169,7 +170,7 @@ def main() -> None:
         c = start.model.config
         a.image_size, a.widths, a.blocks, a.hidden = c.image_size, list(c.widths), c.blocks, c.hidden
     t = time.perf_counter()
-    splits = _load_split_images(folders, a.image_size)
+    splits = load_split_images(folders, a.image_size)
     box = {}
     if a.box_weight > 0:  # the loss reads metrics of the train split only
         texts = splits["train"][2]
@@ -195,7 +196,7 @@ def main() -> None:
 
     package = out / "stage1"
     source = f"--data {' '.join(a.data)}" if a.data else f"--objects {' '.join(map(str, a.objects))}"
-    recipe = (f"python3 -m bench.stage1_net {source}{f' --init {a.init}' if a.init else ''} --image-size {a.image_size} "
+    recipe = (f"python3 -m recipes.stage1_net {source}{f' --init {a.init}' if a.init else ''} --image-size {a.image_size} "
               f"--widths {' '.join(map(str, a.widths))} --blocks {a.blocks} --hidden {a.hidden} --batch {a.batch} "
               f"--lr {a.lr} --steps {a.steps} --minutes {a.minutes} --seed {a.seed} --number-weight {a.number_weight} "
               f"--box-weight {a.box_weight} --discrete-weight {a.discrete_weight}")
@@ -216,7 +217,7 @@ def main() -> None:
     if a.compare:
         other = load_network(a.compare)
         size = other.model.config.image_size
-        own = _load_split_images(folders, size, only="test")["test"] if size != a.image_size else splits["test"]
+        own = load_split_images(folders, size, only="test")["test"] if size != a.image_size else splits["test"]
         index = {k: i for i, k in enumerate(own[0])}
         chosen = [index[k] for k in keys[:n]]
         other_scores, _, _ = _score(other, keys[:n], [own[1][i] for i in chosen], texts[:n])

@@ -1,15 +1,15 @@
 """Scene grouping (``jax3dc.structure.scene_grouping``) measured on predictions already made.
 
-    python3 -m bench.scene_grouping --bench runs/r3/bench --out runs/r3/grouping
-    python3 -m bench.real_objects --score-only --out runs/r3/grouping --model grouped --compare raw
+    python3 -m eval.evaluate scene_grouping --bench runs/r3/bench --out runs/r3/grouping
+    python3 -m eval.evaluate real_objects --score-only --out runs/r3/grouping --model grouped --compare raw
 
-The greedy predictions of a ``bench.real_objects`` folder were decoded without the step; this
+The greedy predictions of a ``eval.evaluators.real_objects`` folder were decoded without the step; this
 applies it to each line exactly as the sampler does after decoding (``regroup_text`` with the
-record's legend boxes), and lays out OUT as a ``bench.real_objects`` folder (OUT/model: grouped,
+record's legend boxes), and lays out OUT as a ``eval.evaluators.real_objects`` folder (OUT/model: grouped,
 OUT/compare: raw, the sets and baselines linked), so ``--score-only`` prints raw and grouped side
 by side on every set. Lines whose key is in no set are dropped; changed keys go to OUT/changed.txt.
 
-    python3 -m bench.scene_grouping --predictions RAW.jsonl --data SHARDS --out GROUPED.jsonl
+    python3 -m eval.evaluate scene_grouping --predictions RAW.jsonl --data SHARDS --out GROUPED.jsonl
 
 applies it to one predictions file of `jax3dc eval run --no-scene-grouping` over SHARDS (every split),
 for `jax3dc eval run --predictions GROUPED.jsonl` to score beside the raw run; with `--why` it also
@@ -17,7 +17,7 @@ counts the scenes whose object partition is still wrong after grouping by what t
 tree or several as the model wrote them, objects merged or split, whether the legend shows two
 bodies on the floor or one body, and whether the model wrote a support relation.
 
-    python3 -m bench.scene_grouping --built-scenes 200 [--seed 0]
+    python3 -m eval.evaluate scene_grouping --built-scenes 200 [--seed 0]
 
 measures the step without a model: the first N scenes of a `data build --scenes N --seed S` (no
 rendering), their objects wired together as a model does it (each object root but the first two
@@ -150,8 +150,8 @@ def regroup_file(predictions: Path, boxes: dict[str, dict], out: Path) -> list[s
 
 def main(argv: Iterable[str] | None = None) -> list[str]:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--bench", help="a bench.real_objects output folder (sets/, model/)")
-    p.add_argument("--out", help="folder to write (a bench.real_objects folder for --score-only)")
+    p.add_argument("--bench", help="a eval.evaluators.real_objects output folder (sets/, model/)")
+    p.add_argument("--out", help="folder to write (a eval.evaluators.real_objects folder for --score-only)")
     p.add_argument("--built-scenes", type=int, default=0, metavar="N", help="measure on N built scenes instead")
     p.add_argument("--seed", type=int, default=0, help="build seed of --built-scenes (default 0)")
     p.add_argument("--predictions", help="one predictions JSONL to regroup (with --data and --out FILE)")

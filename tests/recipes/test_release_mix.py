@@ -2,7 +2,7 @@
 
 import pytest
 
-from bench.release_model import training_mix
+from recipes.release_model import training_mix
 
 
 def test_procedural_only():
@@ -38,6 +38,6 @@ def test_shares_that_leave_the_build_nothing_are_refused():
 def test_mix_entry_names_a_bad_value(text):
     import argparse
 
-    from bench.release_model import mix_entry
+    from recipes.release_model import mix_entry
     with pytest.raises(argparse.ArgumentTypeError, match="DIR=SHARE"):
         mix_entry(text)

@@ -1,7 +1,7 @@
 """The learning check of issue 6: does a model trained from scratch beat the no-training baselines?
 
 Run (one GPU, one command, about 9 minutes):
-    python3 -m bench.learning_run --out runs/learning
+    python3 -m eval.evaluate learning_run --out runs/learning
 Stages, all through the `jax3dc` commands a user runs:
   1. data      `jax3dc data build`: factory objects, 2 views each, split by object
   2. train     `jax3dc train --init small`: the `small` preset from scratch on the train split
@@ -20,6 +20,7 @@ import argparse
 import json
 import os
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 from jax3dc.cli import main as jax3dc
@@ -37,7 +38,7 @@ def _row(metrics: dict) -> dict:
     return {k: metrics.get(k) for k in COLUMNS}
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/learning")
     p.add_argument("--init", default="small", help="preset trained from scratch")
@@ -53,7 +54,7 @@ def main() -> None:
     p.add_argument("--eval-batch", type=int, default=64)
     p.add_argument("--max-new-tokens", type=int, default=2048)
     p.add_argument("--set", action="append", default=[], help="extra `jax3dc train --set` overrides")
-    a = p.parse_args()
+    a = p.parse_args(argv)
     out = Path(a.out)
     seconds = {}
 

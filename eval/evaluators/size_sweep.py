@@ -1,6 +1,6 @@
 """Accuracy against model size and training time: the measurement behind the release size.
 
-    python3 -m bench.size_sweep --data BUILD --out runs/size_sweep [--points mini:1200,release:400,...]
+    python3 -m eval.evaluate size_sweep --data BUILD --out runs/size_sweep [--points mini:1200,release:400,...]
 
 Each point ``PRESET:STEPS`` trains that preset from random weights on BUILD's train split (the
 release tokenizer, the release recipe's batch and learning rate, a full cosine schedule over
@@ -15,13 +15,14 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 from safetensors import safe_open
 
 from jax3dc.cli import main as jax3dc
 
-RELEASE_TOKENIZER = Path(__file__).resolve().parents[1] / "jax3dc" / "release"
+RELEASE_TOKENIZER = Path(__file__).resolve().parents[2] / "jax3dc" / "release"
 
 
 def _call(argv: list[str]) -> None:
@@ -89,7 +90,7 @@ def plot(points: list[dict], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--data", required=True, help="a `jax3dc data build` folder (train and test splits)")
     p.add_argument("--out", default="runs/size_sweep")
@@ -98,7 +99,7 @@ def main() -> None:
     p.add_argument("--lr", type=float, default=1e-3)
     p.add_argument("--budget-min", type=float, default=9.3, help="start no new point after this many minutes")
     p.add_argument("--point-min", type=float, default=4.0, help="minutes a point is assumed to need at most")
-    a = p.parse_args()
+    a = p.parse_args(argv)
     start = time.perf_counter()
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

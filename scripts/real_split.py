@@ -6,7 +6,7 @@ to the held-out set, the first ones in the order of SHA-256 of the folder name, 
 same on every machine, never depends on a view or variant, and a category of one or two objects
 stays in training (it cannot be held out and still be learned).
 
-    python3 -m bench.real_split ../shared/real_train/partnet_mobility --print heldout
+    python3 scripts/real_split.py ../shared/real_train/partnet_mobility --print heldout
 """
 
 from __future__ import annotations

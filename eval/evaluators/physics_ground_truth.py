@@ -11,11 +11,11 @@ joint, failed ground-truth object and missed mutation, to find which check misse
 writes each object's ground-truth verdict per joint, and its seconds, as soon as the object is done,
 so a run cut short keeps what it finished.
 
-CPU, a few minutes: python3 bench/physics_ground_truth.py --seeds 1 (--workers N: N processes; 3 seeds
+CPU, a few minutes: python3 -m eval.evaluate physics_ground_truth --seeds 1 (--workers N: N processes; 3 seeds
 take about 38 min on one core, 3 min with 16 workers). ``--backend mjx`` runs the same checks on MJX
 (kinematics and rollouts), to compare its verdicts with C's: identical ``--details`` files mean the
 same flagged joints and the same missed mutations; ``--verdicts`` files of the two backends compare
-object by object over whatever both finished (``bench/compare_verdicts.py``).
+object by object over whatever both finished (``scripts/compare_verdicts.py``).
 """
 
 from __future__ import annotations
@@ -24,23 +24,21 @@ import argparse
 import contextlib
 import functools
 import json
-import sys
 import time
 import warnings
 from collections import Counter
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from tqdm import tqdm
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
-
-from eval.verdict_accuracy.ground_truth import (factory_objects, false_alarms, imported_objects,  # noqa: E402
+from eval.verdict_accuracy.ground_truth import (factory_objects, false_alarms, imported_objects,
                                                mutation_detection)
-from jax3dc.factories import FACTORIES  # noqa: E402
-from jax3dc.physics.findings import FAILURE, Finding, Verdict, describe  # noqa: E402
+from jax3dc.factories import FACTORIES
+from jax3dc.physics.findings import FAILURE, Finding, Verdict, describe
 
-DEFAULT_FIXTURES = Path(__file__).resolve().parents[2] / "shared" / "fixtures" / "partnet_mobility"
+DEFAULT_FIXTURES = Path(__file__).resolve().parents[3] / "shared" / "fixtures" / "partnet_mobility"
 
 
 def _measure(obj, mutations: bool, backend: str) -> tuple[dict, dict, list[str], list[str], str]:
@@ -87,7 +85,7 @@ def _heading(finding: Finding) -> str:
     return describe(finding).split(" at ")[0]
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seeds", type=int, default=1, help="seeds per factory category (default %(default)s)")
     parser.add_argument("--categories", default="", help="comma list of factory categories (default: all)")
@@ -99,7 +97,7 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=1, help="objects checked in parallel processes (default %(default)s)")
     parser.add_argument("--backend", choices=("c", "mjx"), default="c",
                         help="simulator of the checks (default %(default)s; mjx compiles per object model)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     warnings.filterwarnings("ignore")
 
     categories = [c for c in args.categories.split(",") if c] or sorted(FACTORIES)

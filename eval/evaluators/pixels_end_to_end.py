@@ -1,6 +1,6 @@
 """End-to-end Table 1 from pixels on procedural test records (issue 49), beside stage 2 on true parts.
 
-    python3 -m bench.pixels_end_to_end --data /work/preds/bench/sets/procedural_plain \\
+    python3 -m eval.evaluate pixels_end_to_end --data /work/preds/bench/sets/procedural_plain \\
         --true-parts /work/preds/bench/model/predictions.jsonl --out runs/pixels
 
 For each of the first N records of the split: ``predict`` from the record's image alone — the
@@ -22,6 +22,7 @@ import itertools
 import json
 import time
 from dataclasses import asdict
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +45,7 @@ def successful_joints(evaluation: Evaluation) -> int:
     return sum(m["gate"] == "success" for row in evaluation.rows for m in row.get("matches", []))
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--data", required=True, help="a built dataset (its shards) or a folder of shards")
     p.add_argument("--split", default="test")
@@ -55,7 +56,7 @@ def main() -> None:
     p.add_argument("--dtype", default="bfloat16", choices=("bfloat16", "float32"))
     p.add_argument("--stage1-model", default="", help="a stage-1 folder instead of the shipped one (e.g. a "
                    "former release, for a comparison on the same records)")
-    args = p.parse_args()
+    args = p.parse_args(argv)
 
     out = Path(args.out)
     plain = (r for r in read_records(shard_paths([Path(args.data)], args.split), args.split)

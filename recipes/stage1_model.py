@@ -3,7 +3,7 @@
 
 Run on a GPU host, one command that may be repeated (each call does what is left and stops before
 --budget-min minutes, training resumes from its orbax checkpoint in OUT/train):
-    python3 -m bench.stage1_model --out runs/stage1 --budget-min 9.3
+    python3 -m recipes.stage1_model --out runs/stage1 --budget-min 9.3
   1. data      `jax3dc data build` without augmentation (split/merge variants are no factory's
                parts, so they carry no parameters), varied appearance, --views views per object
   2. tokenizer `jax3dc data tokenizer` over the build (its texts include the parameter texts),
@@ -19,7 +19,7 @@ Run on a GPU host, one command that may be repeated (each call does what is left
 OUT/summary.json holds the numbers; the last lines print them.
 
 CPU smoke run (seconds per step, numbers meaningless):
-    python3 -m bench.stage1_model --out /tmp/stage1 --objects 12 --views 1 --image-size 64 --init tiny \
+    python3 -m recipes.stage1_model --out /tmp/stage1 --objects 12 --views 1 --image-size 64 --init tiny \
         --vocab 600 --steps 3 --batch 2 --seq-len 1024 --eval-records 2 --eval-batch 2 --reserve-min 0
 """
 
@@ -30,12 +30,13 @@ import json
 import os
 import shutil
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
-from bench.release_model import _call, _last_step, _package, _sets
 from eval.parameters_run import table
 from jax3dc.constrained.parameters import longest_text
 from jax3dc.factories.registry import SCHEMAS
+from recipes.steps import call, last_step, package_weights, set_flags
 
 SHIPPED_BUDGET_BYTES = 24 * 2**20  # SPEC §7: all shipped weights together
 
@@ -46,7 +47,7 @@ def _weight_bytes(folder: Path) -> int:
 
 def _eval_parameters(model: Path, data: Path, out: Path, limit: int, batch: int, max_new: int) -> dict:
     if not (out / "metrics.json").exists():
-        _call(["eval", "run", "--task", "parameters", "--checkpoint", str(model), "--data", str(data), "--split", "test",
+        call(["eval", "run", "--task", "parameters", "--checkpoint", str(model), "--data", str(data), "--split", "test",
                "--limit", str(limit), "--batch-size", str(batch), "--bucket", "256", "--max-new-tokens", str(max_new),
                "--out", str(out)])
     return json.loads((out / "metrics.json").read_text())
@@ -54,13 +55,13 @@ def _eval_parameters(model: Path, data: Path, out: Path, limit: int, batch: int,
 
 def _eval_structure(model: Path, data: Path, out: Path, limit: int, batch: int) -> dict:
     if not (out / "metrics.json").exists():
-        _call(["eval", "run", "--checkpoint", str(model), "--data", str(data), "--split", "test", "--limit", str(limit),
+        call(["eval", "run", "--checkpoint", str(model), "--data", str(data), "--split", "test", "--limit", str(limit),
                "--batch-size", str(batch), "--bucket", "256", "--max-new-tokens", "1536", "--out", str(out),
                "--overlays", "0", "--viewers", "0"])
     return json.loads((out / "metrics.json").read_text())
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", default="runs/stage1")
     p.add_argument("--budget-min", type=float, default=9.3, help="stop this call before this many minutes")
@@ -81,7 +82,7 @@ def main() -> None:
     p.add_argument("--eval-batch", type=int, default=100)
     p.add_argument("--reserve-min", type=float, default=2.0, help="minutes kept for packaging and evaluation")
     p.add_argument("--set", action="append", default=[], help="extra `jax3dc train --set` overrides")
-    a = p.parse_args()
+    a = p.parse_args(argv)
     if not 0.0 <= a.structure_weight < 1.0:
         raise SystemExit(f"--structure-weight must be in [0, 1), got {a.structure_weight}")
     start = time.perf_counter()
@@ -97,14 +98,14 @@ def main() -> None:
     manifest = data / "manifest.json"
     if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
         t = time.perf_counter()
-        _call(["data", "build", "--out", str(data), "--objects", str(a.objects), "--scenes", "0", "--views", str(a.views),
+        call(["data", "build", "--out", str(data), "--objects", str(a.objects), "--scenes", "0", "--views", str(a.views),
                "--size", str(a.image_size), "--workers", str(workers), "--quiet",
                *(["--appearance", a.appearance] if a.appearance else [])])
         print(f"[stage1] data: {time.perf_counter() - t:.0f} s", flush=True)
     if not (tok / "tokenizer.json").exists():
-        _call(["data", "tokenizer", "--data", str(data), "--vocab-size", str(a.vocab), "--out", str(tok), "--quiet"])
+        call(["data", "tokenizer", "--data", str(data), "--vocab-size", str(a.vocab), "--out", str(tok), "--quiet"])
 
-    if not (_last_step(train_dir) >= a.steps and (train_dir / "hf" / "config.json").exists()):
+    if not (last_step(train_dir) >= a.steps and (train_dir / "hf" / "config.json").exists()):
         minutes = left() - a.reserve_min
         if minutes < 0.5:
             print("[stage1] no time left for training in this call; run it again", flush=True)
@@ -117,13 +118,13 @@ def main() -> None:
                      f"time_limit_min={minutes:.2f}", "freeze=", f"loader_workers={max(0, workers - 2)}",
                      f"eval_every={min(500, a.steps)}", "eval_batches=2", f"save_every={min(500, a.steps)}",
                      f"log_every={min(50, a.steps)}", "keep_last=1", f"tokenizer={tok}", *a.set]
-        _call(["train", "--init", a.init, "--output-dir", str(train_dir), *_sets(overrides)])
-        if _last_step(train_dir) < a.steps:
-            print(f"[stage1] trained to step {_last_step(train_dir)} of {a.steps}; run again to go on", flush=True)
+        call(["train", "--init", a.init, "--output-dir", str(train_dir), *set_flags(overrides)])
+        if last_step(train_dir) < a.steps:
+            print(f"[stage1] trained to step {last_step(train_dir)} of {a.steps}; run again to go on", flush=True)
             return
 
     if not (package / "config.json").exists():
-        _package(train_dir, package)
+        package_weights(train_dir, package)
     weights = _weight_bytes(package)
     print(f"[stage1] packaged weights: {weights / 2**20:.2f} MiB (all shipped weights together: at most "
           f"{SHIPPED_BUDGET_BYTES / 2**20:.0f} MiB)", flush=True)
@@ -134,7 +135,7 @@ def main() -> None:
         results["structure"] = _eval_structure(package, data, out / "eval_structure", a.eval_records, a.eval_batch)
     rows = [json.loads(line) for line in (train_dir / "metrics.jsonl").read_text().splitlines() if line.strip()]
     train_rows = [r for r in rows if r.get("kind") == "train"]
-    summary = {"args": vars(a), "final_step": _last_step(train_dir), "weights_bytes": weights,
+    summary = {"args": vars(a), "final_step": last_step(train_dir), "weights_bytes": weights,
                "last_train": train_rows[-1] if train_rows else None, "results": results}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     shutil.copy2(out / "summary.json", package / "stage1_summary.json")

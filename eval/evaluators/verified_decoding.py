@@ -8,7 +8,7 @@ no-learning heuristic. Repairs try --repair-kinds (pivot moves by default). Timi
 tokens/s of unconstrained vs constrained greedy at batch --batch, timed on a second run of the
 same batch so compiles are out.
 
-    python3 -m bench.verified_decoding --data DATA --split test --limit 300 --out OUT [--sources DIR]
+    python3 -m eval.evaluate verified_decoding --data DATA --split test --limit 300 --out OUT [--sources DIR]
 
 Resumable: each decode and the verification write JSONL files in OUT and skip what is there.
 Writes OUT/tables-KINDS.md and OUT/summary-KINDS.json.
@@ -21,6 +21,7 @@ import json
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +42,7 @@ from eval.metrics.score import evaluate  # noqa: E402
 from eval.metrics.tables import format_tables  # noqa: E402
 from data_pipeline.record_parts import record_parts  # noqa: E402
 from jax3dc.verify.repair import ALL_KINDS, FLIPPED, PIVOT, SWAPPED, repair  # noqa: E402
-from jax3dc.verify.select import Candidate, Row, _rank, choose, parse_candidate  # noqa: E402
+from jax3dc.verify.select import Candidate, Row, choose, rank, parse_candidate  # noqa: E402
 from eval.run_verify import candidates_of  # noqa: E402
 from jax3dc.release import default_structure_model  # noqa: E402
 from jax3dc.structure import boxes_from_dict, to_json  # noqa: E402
@@ -51,7 +52,7 @@ KIND_NAMES = {"flip": FLIPPED, "pivot": PIVOT, "swap": SWAPPED}
 
 
 def _winner(rows: tuple[Row, ...], k: int) -> int:
-    return max(range(min(k, len(rows))), key=lambda i: (_rank(rows[i]), -i))
+    return max(range(min(k, len(rows))), key=lambda i: (rank(rows[i]), -i))
 
 
 def _choose(job: tuple[Record, tuple[Candidate, ...], dict[str, Path], tuple[int, ...]]) -> dict[str, Any]:
@@ -124,7 +125,7 @@ def _tokens_per_s(generator: Sampler, records: list[Record], batch: int, max_new
     return sum(s[0].new_tokens for s in samples) / seconds
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--data", nargs="+", required=True)
     p.add_argument("--split", default="test")
@@ -142,7 +143,7 @@ def main() -> None:
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     p.add_argument("--dtype", default="bfloat16")
     p.add_argument("--skip-throughput", action="store_true")
-    a = p.parse_args()
+    a = p.parse_args(argv)
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

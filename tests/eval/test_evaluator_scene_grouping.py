@@ -1,9 +1,9 @@
-"""bench.scene_grouping's account of a scene still wrong after grouping: merged and split are told
+"""eval.evaluators.scene_grouping's account of a scene still wrong after grouping: merged and split are told
 apart, a right partition is no miss, and the legend cue is read from the boxes."""
 
 from __future__ import annotations
 
-from bench.scene_grouping import Miss, miss
+from eval.evaluators.scene_grouping import Miss, miss
 from jax3dc.structure import Box, Material, Node, Relation, Structure
 
 

@@ -1,7 +1,7 @@
 """The "no object found" check of ``predict`` (jax3dc.predict.stage1.check_object_image) against real data: it must
 accept every render and refuse blank and noise images.
 
-Run: python3 -m bench.image_check --data DIR [DIR ...]
+Run: python3 -m eval.evaluate image_check --data DIR [DIR ...]
 
 Each DIR is a dataset of ``jax3dc data build`` / ``data import`` (any appearance, size, split);
 every record's image I goes through the check. Prints, per folder and over all, the images
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import io
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -44,10 +45,10 @@ def refused(rgb: np.ndarray) -> str | None:
     return None
 
 
-def main() -> None:
+def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", nargs="+", required=True, metavar="DIR")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     rows = []
     for folder in args.data:
         before = len(rows)
