@@ -1,16 +1,16 @@
-"""The benchmark record (docs/benchmarks.jsonl) stays readable by a script: bench/record.py checks it."""
+"""The benchmark record (docs/benchmarks.jsonl) stays readable by a script, scripts/benchmarks.py, and
+docs/BENCHMARKS.md is exactly what that script writes from it."""
 
 from __future__ import annotations
 
 import importlib.util
 import json
-import re
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-_spec = importlib.util.spec_from_file_location("bench_record", ROOT / "bench" / "record.py")
+_spec = importlib.util.spec_from_file_location("benchmarks", ROOT / "scripts" / "benchmarks.py")
 record = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(record)
 
@@ -40,6 +40,7 @@ def test_the_real_record_passes_the_check_and_has_a_current_figure_per_name():
     ({"met": "no"}, "met"),
     ({"baseline": float("nan")}, "baseline"),
     ({"extra": 1}, "unknown key"),
+    ({"topic": ""}, "topic"),
 ])
 def test_a_bad_line_is_refused_with_its_line_number(tmp_path, change, words):
     path = _write(tmp_path, [GOOD, GOOD, {**GOOD, **change}])
@@ -79,43 +80,73 @@ def test_plot_writes_a_png_and_refuses_an_unknown_name(tmp_path):
     assert record.main(["--record", str(path), "--plot", "no.such.figure", str(tmp_path / "x.png")]) == 1
 
 
-
-def _cited_figures(text: str) -> list[tuple[str, str, str, str | None]]:
-    """(name, date, commit, value cell) of every table row of docs/BENCHMARKS.md that names figures.
-
-    A cell may name several figures of one family ("`release.fixtures_parent`, `_edge_f1`"); their
-    values stand in a table of their own, so the value cell is given only for a single name."""
-    cited = []
-    for line in text.splitlines():
-        if not line.startswith("| `"):
-            continue
-        cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        names = re.findall(r"`([^`]+)`", cells[0])
-        base = names[0].rsplit("_", 1)[0]
-        for name in names:
-            cited.append((base + name if name.startswith("_") else name, cells[5], cells[7],
-                          cells[1] if len(names) == 1 else None))
-    return cited
+def test_the_page_is_what_the_record_writes_and_fits_three_hundred_lines():
+    """BENCHMARKS.md is written by `python3 scripts/benchmarks.py --page`; a hand edit or a line
+    appended without re-running it shows here."""
+    text = record.PAGE.read_text(encoding="utf-8")
+    assert text == record.page(record.load()), f"docs/BENCHMARKS.md is stale: run {record.PAGE_COMMAND}"
+    assert len(text.splitlines()) <= record.MAX_PAGE_LINES
 
 
-def _numbers(cell: str) -> list[float]:
-    """The numbers a cell shows; "a/b" also counts as the percentage 100 a / b."""
-    numbers = [float(x.replace(",", "")) for x in re.findall(r"\d[\d,]*(?:\.\d+)?(?:e-?\d+)?", cell)]
-    numbers += [100 * int(a) / int(b) for a, b in re.findall(r"(\d+) ?/ ?(\d+)", cell) if int(b)]
-    return numbers
+def test_each_figure_on_the_page_once_with_its_current_line():
+    entries = record.load()
+    shown = [e for lines in record.on_page(entries).values() for e in lines]
+    names = [e["name"] for e in shown]
+    assert len(names) == len(set(names)) >= 100
+    text = record.PAGE.read_text(encoding="utf-8")
+    for e in shown:
+        rows = [line for line in text.splitlines() if line.startswith(f"| `{e['name']}` |")]
+        assert len(rows) == 1, e["name"]
+        assert f" {e['date']} " in rows[0] and f" {e['commit'] or '—'} " in rows[0]
 
 
-def test_every_figure_in_benchmarks_md_is_the_current_line_of_the_record():
-    """The page shows current figures only: value, date and commit of the name's latest line."""
-    current = record.latest(record.load())
-    cited = _cited_figures((ROOT / "docs" / "BENCHMARKS.md").read_text())
-    assert len(cited) >= 100
-    for name, date, commit, shown in cited:
-        assert name in current, f"BENCHMARKS.md cites {name}, which docs/benchmarks.jsonl lacks"
-        line = current[name]
-        assert date == line["date"], f"{name}: BENCHMARKS.md says {date}, the record {line['date']}"
-        assert commit == (line["commit"] or "—"), f"{name}: BENCHMARKS.md says {commit}, the record {line['commit']}"
-        if shown is not None:
-            value = line["value"]
-            assert any(abs(n - value) <= max(0.051, abs(value) * 1e-3) for n in _numbers(shown)), (
-                f"{name}: BENCHMARKS.md shows {shown!r}, the record's value is {value}")
+def test_the_page_groups_current_lines_by_topic_and_numbers_long_commands(tmp_path):
+    long_command = "python3 bench/train_step.py" + " --flag value" * 10
+    entries = record.load(_write(tmp_path, [
+        {**GOOD, "topic": "Speed of predict, demo and decoding"},
+        {**GOOD, "name": "new.figure", "command": long_command, "topic": "A topic of its own", "unit": "s (cold)"},
+        {**GOOD, "name": "history.only"},
+        {**GOOD, "name": "release4.heldout_success", "value": 33.9, "met": None, "target": None,
+         "topic": "Release models: real objects", "machine": "developer CPU machine (2 cores), shared"},
+        {**GOOD, "name": "new.figure", "command": long_command, "value": 2.5, "date": "2026-11-23",
+         "topic": "A topic of its own", "unit": "s (cold)"},
+    ]))
+    text = record.page(entries)
+    headings = [line for line in text.splitlines() if line.startswith("## ")]
+    assert headings == ["## Release models: real objects", "## Speed of predict, demo and decoding",
+                        "## A topic of its own", "## Commands"]
+    assert "history.only" not in text
+    assert "| `release4.heldout_success` | 33.9 | tokens/s | 11.4 | 21.5× | — | 2026-11-22 | CPU-2 (shared) |" in text
+    assert "| `decode.tokens_per_s.b1` | 245.4 | tokens/s | 11.4 | 21.5× | 250.0: **missed** |" in text
+    assert "| `new.figure` | 2.5 | s |" in text and text.count(long_command) == 1
+    assert text.rstrip().endswith(f"1. `{long_command}`")
+
+
+def test_a_figure_whose_new_line_names_no_topic_is_reported(tmp_path):
+    entries = record.load(_write(tmp_path, [{**GOOD, "topic": "Decoding"}, {**GOOD, "date": "2026-11-23"}]))
+    assert record.left_page(entries) == [GOOD["name"]]
+    assert GOOD["name"] not in record.page(entries)
+
+
+@pytest.mark.parametrize("machine, short", [
+    ("1 x NVIDIA H100 80GB HBM3 + 16 CPU cores", "H100"),
+    ("one NVIDIA H200 (16 host cores)", "H200"),
+    ("4 x H100 80GB HBM3 (one host), jax 0.11.2", "4×H100"),
+    ("16 CPU cores of the H100 machine, shared with MJX runs", "H100 CPUs (shared)"),
+    ("16 cores of a 4 x NVIDIA H200 host", "4×H200 CPUs"),
+    ("developer CPU machine (2 shared cores); trained on 1 x NVIDIA H200", "CPU-2 (shared)"),
+    ("developer CPU machine, one core", "CPU-2, one core"),
+    ("a TPU v5e", "a TPU v5e"),
+])
+def test_machines_get_one_short_name_each(machine, short):
+    assert record.short_machine(machine) == short
+
+
+@pytest.mark.parametrize("unit, head", [
+    ("tokens/s decode, batch 1", "tokens/s decode, batch 1"),
+    ("s cold compile (trace+lower 2.2, XLA 27.7); 17,004 tokens/s", "s cold compile"),
+    ("% success of matched joints, the real pool's held-out fifth", "% success of matched joints"),
+    ("objects of 200 with the same winners and repairs as C", "objects of 200 with the same winners and…"),
+])
+def test_a_unit_is_cut_to_its_head(unit, head):
+    assert record.short_unit(unit) == head

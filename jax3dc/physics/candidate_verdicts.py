@@ -17,7 +17,8 @@ relations, gravity) run in the worker while the service's device measures them.
 The rollouts of the dynamic checks run in C, as ``physics sweep --backend mjx`` runs them: each
 structure's reachability model has its own contact pairs, which MJX keeps static, so they cannot
 share a compiled launch; with the models they build they are about a third of a C verdict, and the
-CPU side they leave is what bounds this path's speed against C (``docs/BENCHMARKS.md``, note j).
+CPU side they leave is what bounds this path's speed against C (note j of the hand-written
+benchmark page, ``git show e09c126:docs/BENCHMARKS.md``).
 
 With the same models, states, proximity and rollouts, the verdicts differ from the C path's only
 where the two depths of a pair fall on two sides of a tolerance. MJX's is the exact separating-axis
