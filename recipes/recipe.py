@@ -40,6 +40,14 @@ Path_ = Union[str, Data, Earlier, Work]
 
 
 @dataclass(frozen=True)
+class Share:
+    """A dataset folder trained at its own share of examples (``recipes.release_model --mix DIR=SHARE``)."""
+
+    path: Path_
+    share: float
+
+
+@dataclass(frozen=True)
 class StructureCall:
     """One call of ``recipes.release_model`` (the structure model)."""
 
@@ -55,13 +63,18 @@ class StructureCall:
     image_size: int | None = None
     real: Path_ | None = None
     real_weight: float | None = None
+    mix: tuple[Share, ...] = ()
+    fuse_handles: bool | None = None
     pivot_frame: str | None = None
     steps: int | None = None
     batch: int | None = None
     lr: float | None = None
     heldout: Path_ | None = None
     fixtures: Path_ | None = None
+    heldout_varied: Path_ | None = None
+    fixtures_varied: Path_ | None = None
     compare: Path_ | None = None
+    set: tuple[str, ...] = ()  # `jax3dc train --set` overrides, one flag each
 
 
 @dataclass(frozen=True)
@@ -88,6 +101,7 @@ class Stage1NetCall:
 
 
 Call = Union[StructureCall, Stage1NetCall]
+REPEATED_FLAGS = ("mix", "set")  # fields whose values each take the flag again (argparse's append)
 
 
 @dataclass(frozen=True)
@@ -121,6 +135,9 @@ def flags(call: Call, data: Path, out: Path) -> list[str]:
             continue
         if isinstance(value, bool):
             argv.append(flag if value else f"--no-{field.name.replace('_', '-')}")
+        elif field.name in REPEATED_FLAGS:
+            for v in value:
+                argv += [flag, f"{resolve(v.path, data, out, call.package)}={v.share:g}" if isinstance(v, Share) else v]
         elif isinstance(value, tuple):
             argv += [flag, *(resolve(v, data, out, call.package) if not isinstance(v, int) else str(v) for v in value)]
         else:

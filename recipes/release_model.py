@@ -97,6 +97,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     p.add_argument("--augment", action=argparse.BooleanOptionalAction, default=True,
                    help="split/merge variants of each object (default on)")
     p.add_argument("--appearance", default="varied", help="`data build --appearance` (empty: the build's default)")
+    p.add_argument("--fuse-handles", action="store_true", help="`data build --fuse-handles`: every object also with its "
+                   "handles fused into the parts they sit on")
     p.add_argument("--image-size", type=int, default=224)
     p.add_argument("--vocab", type=int, default=2048)
     p.add_argument("--real", default="", help="shards of imported real training objects (train split); several "
@@ -141,7 +143,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     if not (manifest.exists() and json.loads(manifest.read_text()).get("complete")):
         t = time.perf_counter()
         build = ["data", "build", "--out", str(data), "--objects", str(a.objects), "--scenes", str(a.scenes),
-                 "--views", str(a.views), *(["--augment"] if a.augment else []), "--size", str(a.image_size), "--workers", workers, "--quiet"]
+                 "--views", str(a.views), *(["--augment"] if a.augment else []), *(["--fuse-handles"] if a.fuse_handles else []),
+                 "--size", str(a.image_size), "--workers", workers, "--quiet"]
         call(build + (["--appearance", a.appearance] if a.appearance else []))
         print(f"[release] data: {time.perf_counter() - t:.0f} s", flush=True)
 

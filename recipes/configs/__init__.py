@@ -7,7 +7,7 @@ import importlib
 
 from recipes.recipe import Recipe
 
-NAMES: tuple[str, ...] = ("structure_release4", "stage1_release5")
+NAMES: tuple[str, ...] = ("structure_release4", "structure_release5", "stage1_release5")
 
 
 def recipe(name: str) -> Recipe:

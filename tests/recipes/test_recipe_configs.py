@@ -44,3 +44,14 @@ def test_evaluate_lists_the_evaluators(capsys):
     assert evaluate([]) == 0
     listed = capsys.readouterr().out
     assert all(name in listed for name in EVALUATORS)
+
+
+def test_structure_release5_repeats_its_mix_and_set_flags():
+    """Shares and train overrides take their flag each (argparse's append), paths resolved under --data."""
+    [(trainer, argv)] = commands("structure_release5", Path("OUT"), Path("DATA"))
+    assert trainer == "recipes.release_model"
+    assert argv[argv.index("--mix") + 1] == "DATA/composed=0.15" and argv.count("--mix") == 1
+    assert argv[argv.index("--set") + 1] == "loader_workers=14"
+    assert "--fuse-handles" in argv and argv[argv.index("--appearance") + 1] == "mixed"
+    from recipes.release_model import mix_entry
+    assert mix_entry(argv[argv.index("--mix") + 1]) == ("DATA/composed", 0.15)
