@@ -29,6 +29,17 @@ class StructureError(Jax3dcError):
         return type(self), (self.rule, self.where, self.message)
 
 
+class EditError(StructureError):
+    """An edit patch (jax3dc.edits) is malformed, or its result breaks a rule of SPEC §2: ``where``
+    names the place in the patch (``part``, ``ops[2].value``), so the person who wrote it can find
+    it; a StructureError, since an edited structure is validated like any other."""
+
+
+class FolderBusyError(Jax3dcError):
+    """Another edit of the same folder is running (an edit holds the folder's lock from reading
+    structure.json to writing the last file; a second one waits for nobody and says so)."""
+
+
 class InputFileError(Jax3dcError):
     """A file given to us is missing, unreadable or malformed (mesh, PNG, URDF, boxes...)."""
 

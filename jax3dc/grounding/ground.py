@@ -65,15 +65,18 @@ def _unit(k: int, sign: float = 1.0) -> np.ndarray:
     return out
 
 
-def _outward(joint: Joint, child: Box, parent: Box | None) -> Joint:
-    """The hinge with its range turned (if need be) so that the side of the range it mostly spans
-    moves the child away from its parent's centre."""
+def opening_outward(joint: Joint, child: Box, parent: Box | None) -> Joint:
+    """The joint with its range turned (if need be) so that the side of the range it mostly spans
+    moves the child away from its parent's centre: a hinge swings out of its parent, a slide pulls
+    out. Grounding and hand edits (jax3dc.edits) give a new or moved joint a range this way."""
     if parent is None:
         return joint
     c = np.asarray(child.centroid, float)
     away = c - np.asarray(parent.centroid, float)
-    swing = np.cross(np.asarray(joint.axis, float), c - np.asarray(joint.pivot, float))
-    opens = float(swing @ away)
+    if joint.type == "slide":
+        opens = float(np.asarray(joint.axis, float) @ away)
+    else:
+        opens = float(np.cross(np.asarray(joint.axis, float), c - np.asarray(joint.pivot, float)) @ away)
     lo, hi = joint.range
     if abs(opens) < 1e-9 or (opens > 0) == (hi >= -lo):
         return joint
@@ -140,9 +143,9 @@ def ground_joint(joint: Joint, child: Box, parent: Box | None, handles: Sequence
         moved = float(np.linalg.norm((pivot - np.asarray(new.pivot, float))[[i, j]]))
         new = replace(new, pivot=tuple(float(v) for v in pivot))
         if retyped or moved > prior.line_sigma:
-            new = _outward(new, child, parent)
+            new = opening_outward(new, child, parent)
     elif retyped and new.type == "hinge":
-        new = _outward(new, child, parent)
+        new = opening_outward(new, child, parent)
     return new
 
 

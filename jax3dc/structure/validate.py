@@ -437,6 +437,17 @@ def _load_text(text: str | bytes, checker: _Checker) -> object:
     return _UNREADABLE
 
 
+def read_json(text: str | bytes) -> object:
+    """The JSON value of ``text`` under this module's reading rules (size cap, UTF-8, no duplicate
+    keys), for documents that ride beside a structure (an edit patch, jax3dc.edits); raises the
+    first problem as a StructureError (rules document_size, json, duplicate_key)."""
+    checker = _Checker()
+    loaded = _load_text(text, checker)
+    if checker.errors:
+        raise checker.errors[0]
+    return loaded
+
+
 def _check(doc: str | bytes | Mapping, part_ids: Iterable[int] | None) -> tuple[Structure | None, list[StructureError]]:
     checker = _Checker()
     if isinstance(doc, str | bytes):
