@@ -17,6 +17,9 @@ leaves every output made before it (and the report says what failed):
   6. physics verdict -> physics.json;
   7. report.html / report.png (always, when stage 1 gave parts), and viewer.html (when there is a
      structure; viewer_files/ beside it): the object in 3D with its joints and verdict (jax3dc.viewer).
+prediction.json, written with the parts, keeps what steps 5-7 are made from besides the structure
+(scale, mounting, part names, camera, palette seed), so that a hand edit (jax3dc.edits) rewrites
+them through the same functions (jax3dc.predict.outputs).
 
 What to compute is one value, ``PredictConfig``; where to write it and whom to tell are
 ``predict``'s other arguments. The models are plain text-in/text-out callables: set
@@ -28,9 +31,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 from PIL import Image
@@ -40,11 +42,10 @@ from jax3dc.decoding import Decoding
 from jax3dc.errors import InputFileError, Jax3dcError, StructureError
 from jax3dc.geometry.parts import part_boxes, save_parts
 from jax3dc.mounted import is_mounted
-from jax3dc.palette import object_palette
 from jax3dc.physics.findings import Verdict
 from jax3dc.predict.models import TextModel, structure_candidates, structure_model
-from jax3dc.predict.outputs import write_exports, write_physics, write_viewer_page
-from jax3dc.predict.report import ReportInputs, write_report
+from jax3dc.predict.outputs import ObjectContext, OutputListener, write_checked, write_pages
+from jax3dc.predict.report import ReportInputs
 from jax3dc.predict.segmentation import default_camera, render_segmentation
 from jax3dc.predict.stage1 import (Stage1, Stage1Backend, Stage1Config, Stage1Image, Stage1Settings,
                                    check_object_image, parse_stage1)
@@ -52,18 +53,15 @@ from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
 from jax3dc.prompt import build_prompt
 from jax3dc.render import Camera, png_bytes
 from jax3dc.sampler import Sampler
-from jax3dc.structure import Structure, canonicalize, parse_structure, to_json
+from jax3dc.structure import Structure, canonicalize, parse_structure
 from jax3dc.structure.validate import json_text
 from jax3dc.verify.repair import repair
 from jax3dc.verify.select import Candidate, choose
 from jax3dc.verify.verdicts import Physics, VerdictCache
 
 MAX_SEG_SIDE = 1024  # px; S has the image's size and aspect, its longer side at most this
-PALETTE_CATEGORY = "image"  # palette seed: "image/<sha256 of the image>", the same image gets the same colours
 
 STEPS = ("stage 1", "segmentation", "structure model", "exports", "physics", "report")
-OutputListener = Callable[[str, Path], None]
-"""Called with (what, path) as each output is written (the CLI prints them)."""
 
 
 @dataclass
@@ -228,16 +226,15 @@ def _stage1(image: str | Path | Image.Image, backend: Stage1Backend, argument: s
     return rgb, image_png, digest, backend.run(seen, settings)
 
 
-def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict, config: PredictConfig,
-            checkpoints: Checkpoints, outputs: _Outputs, progress: _Progress) -> None:
+def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict, context: ObjectContext,
+            config: PredictConfig, checkpoints: Checkpoints, outputs: _Outputs, progress: _Progress) -> None:
     """Structure model -> structure.json, exports and physics.json, filling ``result``; raises a
     Jax3dcError at the first step that fails (the outputs before it stay). The winner of several
     candidates is parsed once, and each structure's verdict computed once (one VerdictCache serves
     the choice, the repair and physics.json)."""
     progress.step("structure model")
     parts_in = result.stage1
-    metres = config.scale if config.scale is not None else parts_in.metres()
-    check = VerdictCache(Physics(parts_in.parts, metres, result.mounted))
+    check = VerdictCache(Physics(parts_in.parts, context.scale, context.mounted))
     decoding = config.decoding
     generate = config.generate_structure
     structure = None
@@ -263,15 +260,8 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
     progress.step("exports")
     if decoding.repair:
         structure = _repaired(structure, parts_in.parts, boxes, check, outputs)
-    outputs.text("structure", "structure.json", to_json(structure))
     result.structure = structure
-    named = replace(structure, nodes={pid: replace(n, name=parts_in.names.get(pid, n.name))
-                                      for pid, n in structure.nodes.items()})
-    for name, path in write_exports(named, parts_in.parts, outputs.out, metres, result.mounted).items():
-        outputs.wrote(name, path)
-    progress.step("physics")
-    result.verdict = check(structure)
-    outputs.wrote("physics", write_physics(result.verdict, outputs.out))
+    result.verdict = write_checked(structure, parts_in.parts, context, outputs.out, check, outputs.wrote, progress.step)
 
 
 def predict(image: str | Path | Image.Image, config: PredictConfig, out: str | Path = "prediction",
@@ -295,16 +285,19 @@ def predict(image: str | Path | Image.Image, config: PredictConfig, out: str | P
     try:
         steps.step("stage 1")
         rgb, image_png, digest, parts_in = _stage1(image, backend, argument, config, checkpoints, outputs)
-        palette = object_palette(PALETTE_CATEGORY, digest)
         mounted = config.mounted if config.mounted is not None else is_mounted(parts_in.category)
         boxes = part_boxes(parts_in.parts)
         camera = config.camera or default_camera(parts_in.parts)
+        context = ObjectContext(config.scale if config.scale is not None else parts_in.metres(), mounted,
+                                dict(parts_in.names), camera.to_dict(), config.camera is not None, digest)
+        palette = context.palette()
         joints = config.num_joints if config.num_joints is not None else parts_in.joints
         result = PredictResult(out, parts_in, camera, palette, build_prompt(boxes, palette, joints), outputs.files,
                                mounted=mounted)
         outputs.text("prompt", "prompt.txt", result.prompt)
         save_parts(parts_in.parts, out / "parts")
         outputs.wrote("parts", out / "parts")
+        outputs.wrote("context", context.write(out))
         steps.step("segmentation")
         width, height = seg_size(rgb)
         seg, _ids = render_segmentation(parts_in.parts, camera, palette, width, height=height)
@@ -313,16 +306,13 @@ def predict(image: str | Path | Image.Image, config: PredictConfig, out: str | P
 
         error: Jax3dcError | None = None
         try:
-            _stage2(result, image_png, seg_png, boxes, config, checkpoints, outputs, steps)
+            _stage2(result, image_png, seg_png, boxes, context, config, checkpoints, outputs, steps)
         except Jax3dcError as e:
             error = e
         steps.step("report")
-        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, camera.to_dict(), config.camera is not None,
+        report = ReportInputs(rgb, seg, palette, parts_in.names, boxes, context.camera, context.camera_given,
                               result.structure, result.verdict, None if error is None else str(error))
-        for name, path in write_report(report, out).items():
-            outputs.wrote(name, path)
-        if "glb" in outputs.files:  # the viewer articulates the exported object: nothing to show without a structure
-            outputs.wrote("viewer", write_viewer_page(out, outputs.files["glb"], result.verdict, image_png, seg_png))
+        write_pages(report, outputs.files.get("glb"), image_png, seg_png, out, out.resolve().name, outputs.wrote)
     finally:
         steps.bar.close()  # before the caller prints an error line
     if error is not None:
