@@ -47,8 +47,8 @@ from jax3dc.predict.models import TextModel, structure_candidates, structure_mod
 from jax3dc.predict.outputs import ObjectContext, OutputListener, write_checked, write_pages
 from jax3dc.predict.report import ReportInputs
 from jax3dc.predict.segmentation import default_camera, render_segmentation
-from jax3dc.predict.stage1 import (Stage1, Stage1Backend, Stage1Config, Stage1Image, Stage1Settings,
-                                   check_object_image, parse_stage1)
+from jax3dc.predict.stage1 import (Reader, ReaderSettings, Stage1, Stage1Backend, Stage1Config, Stage1Image,
+                                   Stage1Settings, check_object_image, load_reader, parse_stage1)
 from jax3dc.processing.processor import MAX_IMAGE_PIXELS, load_image, to_rgb
 from jax3dc.prompt import build_prompt
 from jax3dc.render import Camera, png_bytes
@@ -97,17 +97,29 @@ def seg_size(image: Image.Image) -> tuple[int, int]:
 
 class Checkpoints:
     """Loads each checkpoint folder once: one model may have learned both tasks (issue 9), and a
-    4B model loaded twice would hold its weights twice."""
+    4B model loaded twice would hold its weights twice. A caller predicting many images (``jax3dc
+    predict`` given several, jax3dc.predict.batch) passes one to every ``predict``, so the models,
+    the stage-1 network's reader included (0.3 s to load, and its compiled program), load once."""
 
     def __init__(self, dtype: str):
         self.dtype = dtype
         self.loaded: dict[Path, Sampler] = {}
+        self.readers: dict[tuple[Path, int, bool], Reader] = {}
 
     def get(self, folder: str | Path) -> Sampler:
         key = Path(folder).resolve()
         if key not in self.loaded:
             self.loaded[key] = Sampler.load(folder, self.dtype)
         return self.loaded[key]
+
+    def reader(self, folder: str | Path, decoding: Decoding) -> Reader:
+        """The reader of the stage-1 model folder (``jax3dc.predict.stage1.load_reader``), decoding
+        a language model's text as ``decoding`` says."""
+        constrained = decoding.options.constrained
+        key = (Path(folder).resolve(), decoding.max_new_tokens, constrained)
+        if key not in self.readers:
+            self.readers[key] = load_reader(folder, ReaderSettings(self.get, decoding.max_new_tokens, constrained))
+        return self.readers[key]
 
 
 class _Outputs:
@@ -222,7 +234,8 @@ def _stage1(image: str | Path | Image.Image, backend: Stage1Backend, argument: s
     seen = Stage1Image(pixels, image_png, str(image) if isinstance(image, (str, Path)) else "the input image")
     if backend.reads_image:
         check_object_image(seen.rgb, seen.where)
-    settings = Stage1Settings(config.stage1, argument, config.decoding, checkpoints.get, outputs.text)
+    settings = Stage1Settings(config.stage1, argument, config.decoding, checkpoints.get,
+                              lambda folder: checkpoints.reader(folder, config.decoding), outputs.text)
     return rgb, image_png, digest, backend.run(seen, settings)
 
 

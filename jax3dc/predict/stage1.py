@@ -105,13 +105,16 @@ class Stage1Config:
 @dataclass(frozen=True)
 class Stage1Settings:
     """What a backend gets besides the image. ``load_model`` loads a checkpoint folder once for the
-    whole prediction (stage 2 may name the same folder); ``write_text(name, filename, text)`` writes
-    an output into --out at once, so that it stays for inspection when a later step fails."""
+    whole prediction (stage 2 may name the same folder), and ``load_reader`` a stage-1 model folder's
+    reader once for every image predict is given (``jax3dc.predict.pipeline.Checkpoints``);
+    ``write_text(name, filename, text)`` writes an output into --out at once, so that it stays for
+    inspection when a later step fails."""
 
     config: Stage1Config
     argument: str | None  # ARG of ``NAME:ARG`` (the mesh file, the parts folder); None for a backend that takes none
     decoding: Decoding
     load_model: Callable[[str | Path], Any]  # folder -> jax3dc.sampler.Sampler
+    load_reader: Callable[[str | Path], Reader]  # stage-1 model folder -> its reader (``load_reader``)
     write_text: Callable[[str, str, str], Path]
 
 
@@ -339,15 +342,14 @@ def _parameters_text(rgb: np.ndarray, settings: Stage1Settings) -> str:
     """The stage-1 model's parameter text for image I (``read_parameters``, else the reader of the
     model folder: --stage1-model, else the shipped one), decoded under the parameter grammar unless
     the decoding is unconstrained (for a language model)."""
-    config, decoding = settings.config, settings.decoding
+    config = settings.config
     read = config.read_parameters
     if read is None:
         folder = config.model_dir if config.model_dir is not None else default_stage1_model()
         if folder is None:
             raise InputFileError("--stage1-model", "--stage1 parameters needs a stage-1 model folder (--stage1-model "
                                                    "DIR); none ships with this install")
-        read = load_reader(folder, ReaderSettings(settings.load_model, decoding.max_new_tokens,
-                                                  decoding.options.constrained))
+        read = settings.load_reader(folder)
     return read(rgb)
 
 

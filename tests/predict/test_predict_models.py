@@ -84,3 +84,14 @@ def test_a_checkpoint_folder_is_loaded_once(tmp_path, monkeypatch):
     assert checkpoints.get(tmp_path / "a" / ".." / "a") is first
     assert checkpoints.get(tmp_path / "b") is not first
     assert len(loads) == 2
+
+
+def test_a_stage1_reader_loads_once_per_folder(tmp_path, monkeypatch):
+    from jax3dc.decoding import Decoding
+    from jax3dc.predict import pipeline
+
+    loads = []  # the shipped stage-1 network is one: 0.3 s to load and its program to compile
+    monkeypatch.setattr(pipeline, "load_reader", lambda folder, settings: loads.append(folder) or (lambda rgb: ""))
+    checkpoints = pipeline.Checkpoints("float32")
+    first = checkpoints.reader(tmp_path, Decoding())
+    assert checkpoints.reader(str(tmp_path / "."), Decoding()) is first and len(loads) == 1
