@@ -19,13 +19,14 @@ from jax3dc.errors import Jax3dcError, shorten
 # importing the package chose the headless GL backend (jax3dc/__init__.py) before the command
 # modules below, some of which import mujoco, which reads MUJOCO_GL only then
 from jax3dc import structure_cli  # noqa: E402
+from jax3dc.edits import cli as edits_cli  # noqa: E402
 from jax3dc.export import cli as export_cli  # noqa: E402
 from jax3dc.physics import cli as physics_cli  # noqa: E402
 from jax3dc.predict import cli as predict_cli  # noqa: E402
 from jax3dc.program import cli as program_cli  # noqa: E402
 from jax3dc.viewer import cli as viewer_cli  # noqa: E402
 
-CORE_COMMANDS = (program_cli, structure_cli, export_cli, physics_cli, predict_cli, viewer_cli)
+CORE_COMMANDS = (program_cli, structure_cli, export_cli, physics_cli, predict_cli, edits_cli, viewer_cli)
 COMMAND_GROUP = "jax3dc.commands"  # entry-point group of the commands of the packages above the core
 
 
