@@ -18,19 +18,15 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
-
-from jax3dc.factories import generate_object  # noqa: E402
-from jax3dc.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances  # noqa: E402
-from jax3dc.physics.sim_model import SimOptions, build_sim_model  # noqa: E402
-from jax3dc.physics.tolerances import PENETRATION_TOL_NU  # noqa: E402
+from jax3dc.factories import generate_object
+from jax3dc.physics.cpu_backend import PairDistancePool, RolloutDepths, pair_distances
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.tolerances import PENETRATION_TOL_NU
 
 
 def main() -> None:

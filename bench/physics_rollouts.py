@@ -18,23 +18,19 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import time
 import warnings
-from pathlib import Path
 
 import jax
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
-
-from jax3dc.factories import generate_object  # noqa: E402
-from jax3dc.physics import cpu_backend  # noqa: E402
-from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs  # noqa: E402
-from jax3dc.physics.mjx_dynamics import mjx_final_qpos  # noqa: E402
-from jax3dc.physics.sim_model import SimOptions, build_sim_model  # noqa: E402
-from jax3dc.physics.states import check_states  # noqa: E402
-from jax3dc.physics.tolerances import (DETACH_TOL_NU, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU,  # noqa: E402
+from jax3dc.factories import generate_object
+from jax3dc.physics import cpu_backend
+from jax3dc.physics.dynamics import SETTLE_STEPS, reachability_model, tolerated_pairs
+from jax3dc.physics.mjx_dynamics import mjx_final_qpos
+from jax3dc.physics.sim_model import SimOptions, build_sim_model
+from jax3dc.physics.states import check_states
+from jax3dc.physics.tolerances import (DETACH_TOL_NU, LIMIT_TOL_HINGE_RAD, LIMIT_TOL_SLIDE_NU,
                                       PENETRATION_TOL_NU, RECONTACT_DEPTH_NU)
 
 

@@ -23,20 +23,17 @@ import io
 import json
 import os
 import shutil
-import sys
 import tempfile
 import time
 import warnings
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
-
-from data_pipeline.record import Record  # noqa: E402
-from data_pipeline.shards import write_dataset  # noqa: E402
-from jax3dc.cli import main as jax3dc  # noqa: E402
-from jax3dc.factories import FACTORIES, generate_object  # noqa: E402
-from jax3dc.structure import to_json  # noqa: E402
+from data_pipeline.record import Record
+from data_pipeline.shards import write_dataset
+from jax3dc.cli import main as jax3dc
+from jax3dc.factories import FACTORIES, generate_object
+from jax3dc.structure import to_json
 
 
 def _record(index: int):

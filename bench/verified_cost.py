@@ -18,13 +18,11 @@ import time
 import warnings
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
-
-from data_pipeline.record_parts import record_parts  # noqa: E402
-from data_pipeline.shards import read_shard, shard_paths  # noqa: E402
-from jax3dc.structure import boxes_from_dict  # noqa: E402
-from jax3dc.verify.select import parse_candidate  # noqa: E402
-from jax3dc.verify.verdicts import Physics  # noqa: E402
+from data_pipeline.record_parts import record_parts
+from data_pipeline.shards import read_shard, shard_paths
+from jax3dc.structure import boxes_from_dict
+from jax3dc.verify.select import parse_candidate
+from jax3dc.verify.verdicts import Physics
 
 
 def main() -> None:
