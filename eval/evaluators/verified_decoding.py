@@ -46,6 +46,7 @@ from jax3dc.verify.select import Candidate, Row, choose, rank, parse_candidate  
 from eval.run_verify import candidates_of  # noqa: E402
 from jax3dc.release import default_structure_model  # noqa: E402
 from jax3dc.structure import boxes_from_dict, to_json  # noqa: E402
+from jax3dc.verify.verdicts import Physics, VerdictCache  # noqa: E402
 
 
 KIND_NAMES = {"flip": FLIPPED, "pivot": PIVOT, "swap": SWAPPED}
@@ -55,13 +56,18 @@ def _winner(rows: tuple[Row, ...], k: int) -> int:
     return max(range(min(k, len(rows))), key=lambda i: (rank(rows[i]), -i))
 
 
+def _check(parts: dict, scale: float, mounted: bool) -> VerdictCache:
+    """One object's verdicts with one rollout thread: the objects run in parallel worker processes."""
+    return VerdictCache(Physics(parts, scale, mounted, threads=1))
+
+
 def _choose(job: tuple[Record, tuple[Candidate, ...], dict[str, Path], tuple[int, ...]]) -> dict[str, Any]:
     """One object: the verdict of every distinct candidate and the best-of-K winners."""
     record, candidates, sources, ks = job
     start = time.perf_counter()
     parts, scale, mounted = record_parts(record, sources)
     boxes = boxes_from_dict(record.meta["boxes"])
-    choice = choose(candidates, boxes.keys(), parts, scale, mounted, boxes, threads=1)
+    choice = choose(candidates, boxes, _check(parts, scale, mounted))
     out: dict[str, Any] = {"key": record.key, "rows": [[r.parsed, r.ok, r.flagged, r.logprob] for r in choice.rows]}
     for k in ks:
         i = _winner(choice.rows, k)
@@ -82,7 +88,7 @@ def _repair(job: tuple[Record, dict[str, Any], tuple[Candidate, ...], dict[str, 
         if parsed and not ok:
             parts, scale, mounted = record_parts(record, sources)
             boxes = boxes_from_dict(record.meta["boxes"])
-            fixed = repair(parse_candidate(text, boxes.keys(), boxes), parts, scale, mounted, boxes, threads=1, kinds=kinds)
+            fixed = repair(parse_candidate(text, boxes.keys(), boxes), boxes, _check(parts, scale, mounted), kinds)
             if fixed.repairs:
                 text, repairs = to_json(fixed.structure), [f"{r.part}:{r.kind}" for r in fixed.repairs]
         out[name] = {"index": i, "text": text, "repairs": repairs}

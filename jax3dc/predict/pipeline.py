@@ -159,13 +159,12 @@ class _Progress:
         self.bar.refresh()
 
 
-def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, check: VerdictCache,
+def _chosen(replies: list[tuple[str, float]], boxes: dict, check: VerdictCache,
             outputs: _Outputs) -> tuple[str, Structure | None]:
     """The candidate the physics verdict prefers, as text and, when it parses, as the canonical
     structure ``choose`` made of it; candidates.json holds every one's row and the reason."""
     candidates = [Candidate(text, logprob) for text, logprob in replies]
-    physics = check.physics
-    choice = choose(candidates, parts.keys(), parts, physics.scale, physics.mounted, boxes, check=check)
+    choice = choose(candidates, boxes, check)
     rows = [{"parsed": r.parsed, "rule": r.rule, "physics_ok": r.ok, "flagged_joints": r.flagged, "logprob": round(r.logprob, 4),
              "text": c.text} for r, c in zip(choice.rows, candidates)]
     doc = {"winner": choice.index, "reason": choice.reason, "candidates": rows}
@@ -173,9 +172,9 @@ def _chosen(replies: list[tuple[str, float]], parts: dict, boxes: dict, check: V
     return candidates[choice.index].text, choice.structure
 
 
-def _repaired(structure: Structure, parts: dict, boxes: dict, check: VerdictCache, outputs: _Outputs) -> Structure:
+def _repaired(structure: Structure, boxes: dict, check: VerdictCache, outputs: _Outputs) -> Structure:
     """``structure`` with flagged hinges repaired where the verdict improves; repairs.json lists them."""
-    fixed = repair(structure, parts, check.physics.scale, check.physics.mounted, boxes, check=check)
+    fixed = repair(structure, boxes, check)
     outputs.text("repairs", "repairs.json", json.dumps([r.to_dict() for r in fixed.repairs], indent=1) + "\n")
     return fixed.structure
 
@@ -258,7 +257,7 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
         if decoding.options.candidates > 1:
             replies = structure_candidates(sampler, image_png, seg_png, decoding.max_new_tokens,
                                            decoding.options)(result.prompt)
-            result.raw_text, structure = _chosen(replies, parts_in.parts, boxes, check, outputs)
+            result.raw_text, structure = _chosen(replies, boxes, check, outputs)
         else:
             generate = structure_model(sampler, image_png, seg_png, decoding.max_new_tokens, decoding.options)
     if result.raw_text is None:
@@ -272,7 +271,7 @@ def _stage2(result: PredictResult, image_png: bytes, seg_png: bytes, boxes: dict
         structure = canonicalize(parsed, boxes)
     progress.step("exports")
     if decoding.repair:
-        structure = _repaired(structure, parts_in.parts, boxes, check, outputs)
+        structure = _repaired(structure, boxes, check, outputs)
     result.structure = structure
     result.verdict = write_checked(structure, parts_in.parts, context, outputs.out, check, outputs.wrote, progress.step)
 

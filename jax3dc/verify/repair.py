@@ -34,7 +34,7 @@ from jax3dc.physics.tolerances import ATTACH_TOL_NU
 from jax3dc.physics.verdict import line_distance, surface_points
 from jax3dc.structure import Box, Joint, Structure, canonicalize, parse_structure, to_json
 from jax3dc.structure.serialize import joint_to_dict
-from jax3dc.verify.verdicts import Physics, VerdictCache
+from jax3dc.verify.verdicts import VerdictCache
 
 FLIPPED = "axis flipped"
 PIVOT = "pivot moved"
@@ -70,13 +70,14 @@ class Repaired:
     after: Verdict  # of the repaired structure
 
 
-def repair(structure: Structure, parts: dict[int, trimesh.Trimesh], scale: float, mounted: bool,
-           boxes: Mapping[int, Box], backend: str = "c", dynamics: bool = True, threads: int | None = None,
-           kinds: frozenset[str] = DEFAULT_KINDS, check: VerdictCache | None = None) -> Repaired:
+def repair(structure: Structure, boxes: Mapping[int, Box], check: VerdictCache,
+           kinds: frozenset[str] = DEFAULT_KINDS) -> Repaired:
     """``structure`` with its flagged joints repaired where an alternative improves the verdict;
-    ``kinds``: the alternatives tried (FLIPPED, PIVOT, SWAPPED; a pivot moved and flipped needs both);
-    ``check``: a caller's cache of these parts' verdicts (the choice's, reused)."""
-    check = check or VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))
+    ``boxes``: the legend's part boxes (canonical form and the type swap's lever); ``check``: the
+    caller's cache of these parts' verdicts, whose meshes also place the moved pivots (the choice's
+    cache, so the winner is not checked again); ``kinds``: the alternatives tried (FLIPPED, PIVOT,
+    SWAPPED; a pivot moved and flipped needs both)."""
+    parts = check.physics.parts
     current = _written(structure, boxes)
     before = verdict = check(current)
     repairs: list[Repair] = []

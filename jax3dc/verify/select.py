@@ -11,13 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
-import trimesh
 
 from jax3dc.errors import StructureError
 from jax3dc.physics.findings import Verdict
 from jax3dc.structure import Box, Structure, canonicalize, parse_structure
 from jax3dc.structure.validate import json_text
-from jax3dc.verify.verdicts import Physics, VerdictCache
+from jax3dc.verify.verdicts import VerdictCache
 
 
 @dataclass(frozen=True)
@@ -51,15 +50,15 @@ def parse_candidate(text: str, part_ids: Collection[int], boxes: Mapping[int, Bo
     return canonicalize(parse_structure(json_text(text), part_ids), boxes)
 
 
-def choose(candidates: Sequence[Candidate], part_ids: Collection[int], parts: dict[int, trimesh.Trimesh],
-           scale: float, mounted: bool, boxes: Mapping[int, Box], backend: str = "c", dynamics: bool = True,
-           threads: int | None = None, check: VerdictCache | None = None) -> Choice:
-    """The best candidate by the order of the module docstring (ties: the earlier candidate);
-    ``check``: a caller's cache of these parts' verdicts, so later steps reuse the winner's."""
+def choose(candidates: Sequence[Candidate], boxes: Mapping[int, Box], check: VerdictCache) -> Choice:
+    """The best candidate by the order of the module docstring (ties: the earlier candidate).
+
+    ``boxes``: the legend's part boxes, whose ids a candidate must name exactly and with which it is
+    canonicalised; ``check``: the caller's cache of these parts' verdicts (it holds the meshes and
+    how they are checked), passed in so later steps (the repair) reuse the winner's verdict."""
     if not candidates:
         raise ValueError("choose needs at least one candidate")
-    check = check or VerdictCache(Physics(parts, scale, mounted, backend, dynamics, threads))
-    parsed = [_parsed(candidate.text, part_ids, boxes) for candidate in candidates]
+    parsed = [_parsed(candidate.text, boxes.keys(), boxes) for candidate in candidates]
     structures = [structure for structure, _ in parsed]
     verdicts = iter(check.many([s for s in structures if s is not None]))  # together: one MJX launch
     rows = [Row(False, rule, None, None, c.logprob, None) if structure is None else

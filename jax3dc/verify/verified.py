@@ -36,8 +36,8 @@ def verify_object(key: str, candidates: Sequence[Candidate], obj: ObjectParts, f
                   backend: str = "c", dynamics: bool = True, threads: int | None = None) -> Verified:
     """The winner of ``candidates`` and, with ``fix``, its repair when its verdict fails."""
     check = VerdictCache(Physics(obj.parts, obj.scale, obj.mounted, backend, dynamics, threads))
-    choice = choose(candidates, obj.boxes.keys(), obj.parts, obj.scale, obj.mounted, obj.boxes, check=check)
+    choice = choose(candidates, obj.boxes, check)
     fixed = None
     if fix and choice.structure is not None and not choice.rows[choice.index].ok:
-        fixed = repair(choice.structure, obj.parts, obj.scale, obj.mounted, obj.boxes, check=check)
+        fixed = repair(choice.structure, obj.boxes, check)
     return Verified(key, choice, fixed)

@@ -47,7 +47,7 @@ def _lines(choice: Choice) -> list:
 def _choose(obj, candidates, backend: str) -> tuple[Choice, VerdictCache]:
     boxes = part_boxes(obj.parts)
     check = VerdictCache(Physics(obj.parts, obj.scale, obj.mounted, backend, threads=1))
-    return choose(candidates, boxes.keys(), obj.parts, obj.scale, obj.mounted, boxes, check=check), check
+    return choose(candidates, boxes, check), check
 
 
 def test_mjx_chooses_as_c_does():
@@ -66,7 +66,7 @@ def test_mjx_chooses_as_c_does():
             continue
         boxes = part_boxes(obj.parts)
         flagged = parse_candidate(candidates[worst].text, boxes.keys(), boxes)
-        fixed = [repair(flagged, obj.parts, obj.scale, obj.mounted, boxes, check=check) for check in (c_check, mjx_check)]
+        fixed = [repair(flagged, boxes, check) for check in (c_check, mjx_check)]
         assert to_json(fixed[1].structure) == to_json(fixed[0].structure), obj.name
         assert [r.to_dict() for r in fixed[1].repairs] == [r.to_dict() for r in fixed[0].repairs], obj.name
         assert fixed[1].after.to_json()["joints"] == fixed[0].after.to_json()["joints"], obj.name

@@ -10,7 +10,7 @@ MICROWAVE = "microwave/microwave_000001/0"
 
 
 def run(obj, structure, kinds=ALL_KINDS):
-    return repair(structure, obj.parts, obj.scale, obj.mounted, obj.boxes, kinds=kinds)
+    return repair(structure, obj.boxes, obj.check(), kinds)
 
 
 @pytest.fixture
@@ -31,10 +31,10 @@ def test_a_flipped_lid_is_flipped_back(box):
 def test_by_default_only_pivots_move(box):
     """Flips and type swaps are measured to undo right joints the verdict flags (repair.DEFAULT_KINDS),
     so the default leaves a flipped lid as it is, and the lid's pivot still gets repaired."""
-    out = repair(flipped(box.target, 2), box.parts, box.scale, box.mounted, box.boxes)
+    out = repair(flipped(box.target, 2), box.boxes, box.check())
     assert all(fix.kind == PIVOT for fix in out.repairs)
     assert out.structure.nodes[2].joint.range == flipped(box.target, 2).nodes[2].joint.range
-    moved = repair(pivot_moved_away(box.target, 2), box.parts, box.scale, box.mounted, box.boxes)
+    moved = repair(pivot_moved_away(box.target, 2), box.boxes, box.check())
     assert moved.after.ok and [fix.kind for fix in moved.repairs] == [PIVOT]
 
 

@@ -14,7 +14,7 @@ MICROWAVE = "microwave/microwave_000001/0"
 
 
 def run(obj, candidates):
-    return choose(candidates, obj.boxes.keys(), obj.parts, obj.scale, obj.mounted, obj.boxes)
+    return choose(candidates, obj.boxes, obj.check())
 
 
 @pytest.fixture

@@ -10,6 +10,7 @@ from data_pipeline.record import Record
 from data_pipeline.record_parts import record_parts
 from jax3dc.verify.select import parse_candidate
 from jax3dc.structure import Box, Structure, boxes_from_dict
+from jax3dc.verify.verdicts import Physics, VerdictCache
 
 IMPORTED = ("door_8877", "microwave_7119")  # PartNet-Mobility fixtures: a mounted door, a free-standing microwave
 
@@ -21,6 +22,10 @@ class CheckedObject:
     scale: float
     mounted: bool
     boxes: dict[int, Box]
+
+    def check(self) -> VerdictCache:
+        """A fresh verdict cache of these parts (C MuJoCo, with the dynamics), as predict makes one."""
+        return VerdictCache(Physics(self.parts, self.scale, self.mounted))
 
 
 def checked_object(record: Record) -> CheckedObject:
