@@ -23,7 +23,6 @@ import contextlib
 import json
 import multiprocessing as mp
 import os
-import sys
 import time
 import warnings
 from concurrent.futures import ProcessPoolExecutor
@@ -31,19 +30,18 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # run from anywhere: the repo root's packages
-
-from eval.verdict_accuracy.candidates import sampled_candidates  # noqa: E402
-from eval.verdict_accuracy.ground_truth import factory_objects  # noqa: E402
-from jax3dc.export.simulation import collision_pieces  # noqa: E402
-from jax3dc.factories import FACTORIES  # noqa: E402
-from jax3dc.geometry.parts import part_boxes  # noqa: E402
-from jax3dc.physics.candidate_verdicts import candidate_verdicts, device_crossings, start_shapes  # noqa: E402
-from jax3dc.physics.mjx_service import serve_workers  # noqa: E402
-from jax3dc.physics.verdict import crossing_plan_of, kinematic_inputs  # noqa: E402
-from jax3dc.structure import to_json  # noqa: E402
-from jax3dc.verify.select import parse_candidate  # noqa: E402
-from jax3dc.verify.verified import ObjectParts, verify_object  # noqa: E402
+from eval.verdict_accuracy.candidates import sampled_candidates
+from eval.verdict_accuracy.ground_truth import factory_objects
+from jax3dc.export.simulation import collision_pieces
+from jax3dc.factories import FACTORIES
+from jax3dc.geometry.parts import part_boxes
+from jax3dc.physics.candidate_verdicts import candidate_verdicts
+from jax3dc.physics.launcher import device_crossings, start_shapes
+from jax3dc.physics.mjx_service import serve_workers
+from jax3dc.physics.verdict import crossing_plan_of, kinematic_inputs
+from jax3dc.structure import to_json
+from jax3dc.verify.select import parse_candidate
+from jax3dc.verify.verified import ObjectParts, verify_object
 
 
 @dataclass(frozen=True)

@@ -6,10 +6,11 @@ part and frame (``convex_pieces``' caches: a candidate that moves no part's fram
 nothing). Each structure's kinematic model, check states and C proximity are built on the CPU as
 ``verdict.verdict_with_curves`` builds them; the penetration depths of every structure's states
 then come from one ``mjx_batch`` launch over the same models read without their detachment margin
-(no second model is built), padded to at least ``start_shapes()`` and to the largest
-shapes this process has met, so a run over many objects compiles only when a larger object comes.
-In a worker process of a device service (``mjx_service``, as ``physics sweep --backend mjx`` runs
-it) the structures go to the service instead, which launches the requests of all its workers together.
+(no second model is built), sent to a ``launcher.Launcher``: by default this process's
+``LocalLauncher``, which pads to at least ``launcher.start_shapes()`` and to the largest shapes it
+has launched, so a run over many objects compiles only when a larger object comes; in a worker
+process of a device service (``mjx_service``, as ``physics sweep --backend mjx`` runs it) the
+service's client, which launches the requests of all its workers together.
 On an accelerator the board-crossing queries of every structure (``verdict.crossing_plan_of``, the
 largest CPU share of a C verdict) go with them, to one ``crossing_batch`` launch; on a CPU numpy
 answers them faster, in the checks. The checks that read no distances (``DISTANCE_FREE_CHECKS``:
@@ -34,56 +35,32 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import threading
 import time
 import warnings
 from collections.abc import Sequence
 
-import numpy as np
 import trimesh
 
-from jax3dc.physics import cpu_backend, launch_start
+from jax3dc.physics import cpu_backend
 from jax3dc.physics.findings import Verdict
-from jax3dc.physics.mjx_service import installed_client
+from jax3dc.physics.launcher import Launcher, process_launcher
 from jax3dc.physics.verdict import (CHECKS, DISTANCE_FREE_CHECKS, CheckRun, KinematicInputs, check_names, crossing_plan_of,
                                     kinematic_inputs, run_checks)
 from jax3dc.structure.schema import Structure
 
-def start_shapes() -> dict:
-    """What a process's first candidate launch is padded to on this platform (``mjx_batch.Shapes``
-    fields): ``launch_start.CANDIDATE_PENETRATION`` on an accelerator, so that the shapes seldom grow;
-    none on a CPU, where padding costs compute in proportion (8 cabinet candidates: 2.7 s of broad
-    phase padded so, on 2 cores), so launches start at the size classes they need and grow."""
-    return {} if jax_on_cpu() else launch_start.CANDIDATE_PENETRATION
-
-
-def device_crossings() -> bool:
-    """Whether this platform's launches answer the crossing queries too: on an accelerator (on a
-    CPU numpy answers them faster: 1.6 s against 4.3 s for 19 candidates' 736 queries, warm)."""
-    return not jax_on_cpu()
-
-
-def jax_on_cpu() -> bool:
-    """JAX's default backend is the CPU."""
-    import jax  # lazy: jax (0.39 s) stays out of the CPU physics path, which loads none of it
-
-    return jax.default_backend() == "cpu"
-
-
-_largest = None  # mjx_batch.Shapes: the largest this process has launched (every launch pads to it)
-_largest_crossings = None  # crossing_batch.CrossingShapes: the same for crossing launches
-_lock = threading.Lock()
-
 
 def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh.Trimesh], scale: float, mounted: bool,
                        dynamics: bool = True, threads: int | None = None,
-                       timings: dict[str, float] | None = None, crossings: bool | None = None) -> list[Verdict]:
+                       timings: dict[str, float] | None = None, crossings: bool | None = None,
+                       launcher: Launcher | None = None) -> list[Verdict]:
     """One verdict per structure (in order) over ``parts`` (nu, ``scale`` metres per nu), the
     interpenetration of all of them measured in one MJX launch. ``threads``: C rollout threads;
     ``timings`` gathers seconds per step: the CPU's "kinematic inputs", "penetration arrays",
     "crossing plans" and "checks" (rollouts included), and the launches' phases
-    (``mjx_batch.batch_pair_distances``, "crossings"); ``crossings``: answer the crossing queries in
-    the launch (default: in a service's worker as the service says, else on an accelerator)."""
+    (``mjx_batch.batch_pair_distances``, "crossings"; a service times its own); ``crossings``: answer
+    the crossing queries in the launch (default: as ``launcher`` says: a service's worker as its
+    service, else on an accelerator); ``launcher``: where the launches go (default:
+    ``launcher.process_launcher()``, which pads to the largest shapes this process has launched)."""
     if not structures:
         return []
     names = check_names(None, dynamics)
@@ -92,14 +69,14 @@ def candidate_verdicts(structures: Sequence[Structure], parts: dict[int, trimesh
     clock.lap("kinematic inputs")
     arrays = _penetration_arrays(inputs)
     clock.lap("penetration arrays")
-    service = installed_client()
+    launcher = launcher or process_launcher()
     if crossings is None:
-        crossings = service.crossings if service is not None else device_crossings()
+        crossings = launcher.crossings
     plans = None
     if crossings and "joints" in names:
         plans = [crossing_plan_of(s, parts, i.sim, i.states) for s, i in zip(structures, inputs)]
         clock.lap("crossing plans")
-    replies = _submit(arrays, [i.states.qpos for i in inputs], plans, timings)
+    replies = launcher.submit(arrays, [i.states.qpos for i in inputs], plans, timings)
     clock.lap()
     rollout = functools.partial(cpu_backend.final_qpos, threads=threads)
     runs = [CheckRun(s, parts, i.sim, i.states, None, i.proximity, rollout, mounted) for s, i in zip(structures, inputs)]
@@ -136,27 +113,3 @@ class _Clock:
         if name is not None and self.timings is not None:
             self.timings[name] = self.timings.get(name, 0.0) + now - self.last
         self.last = now
-
-
-def _submit(arrays: list, qpos: list[np.ndarray], plans: list | None, timings: dict[str, float] | None):
-    """A function that returns the distances of ``arrays`` at ``qpos`` and, with ``plans``, their
-    crossing queries' first states: in a worker of a device service (``mjx_service``), the service's
-    launches, shared with the other workers' requests and sent at once; else launches in this
-    process, run before it returns."""
-    global _largest, _largest_crossings
-
-    service = installed_client()
-    if service is not None:
-        return service.submit(arrays, qpos, plans)
-    # lazy: MJX and jax (0.46 s), for a launch in this process only
-    from jax3dc.physics.crossing_batch import CrossingShapes, batch_first_crossings
-    from jax3dc.physics.mjx_batch import Shapes, batch_pair_distances
-
-    first = None
-    with _lock:
-        at_least = _largest or Shapes(**start_shapes())
-        distances, _largest = batch_pair_distances(arrays, qpos, at_least, timings)
-        if plans is not None:
-            least = CrossingShapes() if jax_on_cpu() else CrossingShapes(**launch_start.CROSSINGS)
-            first, _largest_crossings = batch_first_crossings(plans, _largest_crossings or least, timings)
-    return lambda: (distances, first)

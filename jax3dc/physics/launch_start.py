@@ -5,7 +5,7 @@ sweeps, ``crossing_batch.CrossingShapes`` for board crossings), so they compile 
 grow; starting from shapes that most batches fit, a run compiles once or twice. Each entry holds
 the fields of one of those dataclasses, as plain values, so that the table loads without jax or
 MJX (the CPU physics path reads it and imports neither). On a CPU launches start from the size
-classes they need instead (``candidate_verdicts.start_shapes``), since padding costs compute there.
+classes they need instead (``launcher.start_shapes``), since padding costs compute there.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ import queue
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import mujoco
@@ -31,6 +31,7 @@ import numpy as np
 
 from jax3dc.compilation import CompileClock
 from jax3dc.physics import launch_start
+from jax3dc.physics.launcher import PROCESS_DEVICE, Replies
 
 
 @dataclass
@@ -143,12 +144,10 @@ class DeviceService:
         return results
 
 
-_CLIENT: "DeviceClient | None" = None
-
-
 @dataclass
 class DeviceClient:
-    """A worker's handle on the service: ``(model, qpos) -> [S, nbody, nbody]`` like ``padded_pair_distances``."""
+    """A worker's handle on the service: ``(model, qpos) -> [S, nbody, nbody]`` like
+    ``padded_pair_distances``, and a ``launcher.Launcher`` (``submit``)."""
 
     worker: int
     requests: object
@@ -165,17 +164,18 @@ class DeviceClient:
 
         return self.submit([object_arrays(m) for m in models], qpos)()[0]
 
-    def submit(self, arrays: list, qpos: list[np.ndarray], plans: list | None = None
-               ) -> Callable[[], tuple[list[np.ndarray], list[list[int | None]] | None]]:
+    def submit(self, arrays: Sequence, qpos: Sequence[np.ndarray], plans: Sequence | None = None,
+               timings: dict[str, float] | None = None) -> Callable[[], Replies]:
         """Send the distances of ``arrays`` (``mjx_batch.ObjectArrays``) at ``qpos`` and, with
         ``plans`` (``crossing.CrossingPlan``), the first crossing states of their queries; the
-        returned function waits for the replies, so the caller can work while the device does."""
+        returned function waits for the replies, so the caller can work while the device does.
+        ``timings`` stays as it is: the launches' phases are the service's (``ServiceStats.phases``)."""
         for a, q in zip(arrays, qpos):
             self.requests.put((self.worker, ("sweep", a), np.asarray(q)))
         if plans is not None:  # in one message: the boards the plans share are pickled once
             self.requests.put((self.worker, ("crossings", list(plans)), None))
 
-        def wait() -> tuple[list[np.ndarray], list[list[int | None]] | None]:
+        def wait() -> Replies:
             results = self._replies(len(arrays) + (plans is not None))
             return (results[:-1], results[-1]) if plans is not None else (results, None)
 
@@ -190,16 +190,16 @@ class DeviceClient:
 
 
 def init_worker(requests, replies, next_worker, crossings: bool = False) -> None:
-    """Pool initializer: this process's client, and JAX kept off the accelerator (the workers build
-    arrays; only the main process launches)."""
-    global _CLIENT
+    """Pool initializer: this process's client (``launcher.PROCESS_DEVICE.client``, which then takes
+    the process's launches), and JAX kept off the accelerator (the workers build arrays; only the
+    main process launches)."""
     os.environ["JAX_PLATFORMS"] = "cpu"
     if "jax" in sys.modules:  # imported already (by the job's module): its backends start only on first use
         sys.modules["jax"].config.update("jax_platforms", "cpu")
     with next_worker.get_lock():
         worker = next_worker.value
         next_worker.value += 1
-    _CLIENT = DeviceClient(worker, requests, replies[worker], crossings)
+    PROCESS_DEVICE.client = DeviceClient(worker, requests, replies[worker], crossings)
 
 
 def serve_workers(stack: contextlib.ExitStack, context, workers: int, **service) -> tuple[DeviceService, dict]:
@@ -216,12 +216,9 @@ def serve_workers(stack: contextlib.ExitStack, context, workers: int, **service)
     return device, {"initializer": init_worker, "initargs": device.worker_args()}
 
 
-def installed_client() -> DeviceClient | None:
-    """This process's client when a pool's ``init_worker`` installed one, else None."""
-    return _CLIENT
-
-
 def client() -> DeviceClient:
-    if _CLIENT is None:
+    """This process's client, installed by a pool's ``init_worker``."""
+    installed = PROCESS_DEVICE.client
+    if not isinstance(installed, DeviceClient):
         raise RuntimeError("no device service in this process: init_worker was not run")
-    return _CLIENT
+    return installed

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-from jax3dc.physics.candidate_verdicts import device_crossings, start_shapes
+from jax3dc.physics.launcher import device_crossings, start_shapes
 from jax3dc.physics.mjx_service import serve_workers
 from jax3dc.verify.select import Candidate
 from jax3dc.verify.verified import ObjectParts, Verified, verify_object
