@@ -24,6 +24,7 @@ import dataclasses
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -56,6 +57,45 @@ class CrossingShapes:
         return dataclasses.replace(big, states=other.states)
 
 
+class Chunks(NamedTuple):
+    """Points of tracks, ``CHUNK_POINTS`` a row, at rest (float32, nu)."""
+
+    points: np.ndarray  # [chunks, CHUNK_POINTS, 3]
+    mask: np.ndarray  # [chunks, CHUNK_POINTS] the real points
+
+
+class Tracks(NamedTuple):
+    """A joint path per track: the states its points are posed at."""
+
+    hinge: np.ndarray  # [tracks] hinge (else slide)
+    axis: np.ndarray  # [tracks, 3] unit joint axis
+    pivot: np.ndarray  # [tracks, 3] hinge anchor
+    values: np.ndarray  # [tracks, states] joint values (padded states are never seen)
+    counts: np.ndarray  # [tracks] the real states
+
+
+class Boards(NamedTuple):
+    """The boards of the queries (``crossing.Board``), padded to ``CrossingShapes.cells``."""
+
+    centre: np.ndarray  # [boards, 3]
+    frame: np.ndarray  # [boards, 3, 3] rows: the board's axes, the thin one first
+    half: np.ndarray  # [boards, 3] half sizes along them
+    inset: np.ndarray  # [boards, 2, 2] the covered area's insets from each end of the two long axes
+    covered: np.ndarray  # [boards, cells0, cells1] which cells the board covers
+    cell_shape: np.ndarray  # [boards, 2] the real cells
+
+
+class CrossingTables(NamedTuple):
+    """What one launch reads (a pytree: JAX flattens the named tuples): the items' tables and, per
+    item, (chunk, track, board) rows; only the first ``steps`` x ITEMS_PER_STEP items are computed."""
+
+    chunks: Chunks
+    tracks: Tracks
+    boards: Boards
+    table: np.ndarray  # [items, 3] int32
+    steps: np.int32
+
+
 def batch_first_crossings(plans: Sequence[CrossingPlan], at_least: CrossingShapes | None = None,
                           timings: dict[str, float] | None = None) -> tuple[list[list[int | None]], CrossingShapes]:
     """Each plan's queries' first crossing states (None: never), as ``crossing.first_crossings``
@@ -65,7 +105,7 @@ def batch_first_crossings(plans: Sequence[CrossingPlan], at_least: CrossingShape
     if not any(p.queries for p in plans):
         return [[] for _ in plans], at_least
     host, shapes, owners = _host_arrays(plans, at_least)
-    state = np.asarray(_launch(*host))[:len(owners)]
+    state = np.asarray(_launch(host))[:len(owners)]
     first = np.full(sum(len(p.queries) for p in plans), NEVER, np.int64)
     np.minimum.at(first, owners, state)
     out, at = [], 0
@@ -77,7 +117,8 @@ def batch_first_crossings(plans: Sequence[CrossingPlan], at_least: CrossingShape
     return out, shapes
 
 
-def _host_arrays(plans: Sequence[CrossingPlan], at_least: CrossingShapes):
+def _host_arrays(plans: Sequence[CrossingPlan], at_least: CrossingShapes
+                 ) -> tuple[CrossingTables, CrossingShapes, np.ndarray]:
     """The padded tables of a launch, its shapes and, per real item, the query (numbered over all
     plans) it answers."""
     chunks, chunk_mask, track_rows, boards, items, owners = [], [], [], [], [], []
@@ -138,9 +179,9 @@ def _host_arrays(plans: Sequence[CrossingPlan], at_least: CrossingShapes):
         cell_shape[i] = b.covered.shape
     table = np.zeros((shapes.items, 3), np.int32)
     table[:len(items)] = items
-    steps = np.int32(-(-len(items) // ITEMS_PER_STEP))
-    host = (points, point_mask, hinge, axes_, pivots, values, counts, centre, frame, half, inset, covered, cell_shape, table,
-            steps)
+    host = CrossingTables(Chunks(points, point_mask), Tracks(hinge, axes_, pivots, values, counts),
+                          Boards(centre, frame, half, inset, covered, cell_shape), table,
+                          np.int32(-(-len(items) // ITEMS_PER_STEP)))
     return host, shapes, np.asarray(owners, np.int64)
 
 
@@ -150,27 +191,32 @@ def _power(n: int, smallest: int) -> int:
 
 
 @jax.jit
-def _launch(points, point_mask, hinge, axis, pivot, values, counts, centre, frame, half, inset, covered, cell_shape,
-            table, steps) -> jax.Array:
+def _launch(tables: CrossingTables) -> jax.Array:
     """[items]: each item's first crossing state (NEVER: none, and every item past the first
-    ``steps`` x ITEMS_PER_STEP, which are not computed)."""
+    ``tables.steps`` x ITEMS_PER_STEP, which are not computed)."""
 
     def one(row):
-        c, t, b = row[0], row[1], row[2]
-        return _first_state(points[c], point_mask[c], hinge[t], axis[t], pivot[t], values[t], counts[t],
-                            centre[b], frame[b], half[b], inset[b], covered[b], cell_shape[b])
+        return _first_state(_row(tables.chunks, row[0]), _row(tables.tracks, row[1]), _row(tables.boards, row[2]))
 
-    rows = table.reshape(-1, ITEMS_PER_STEP, 3)
+    rows = tables.table.reshape(-1, ITEMS_PER_STEP, 3)
 
     def step(i, out):
         return out.at[i].set(jax.vmap(one)(rows[i]))
 
-    out = jax.lax.fori_loop(0, steps, step, jnp.full(rows.shape[:2], NEVER, jnp.int32))
+    out = jax.lax.fori_loop(0, tables.steps, step, jnp.full(rows.shape[:2], NEVER, jnp.int32))
     return out.reshape(-1)
 
 
-def _first_state(rest, mask, hinge, axis, pivot, values, count, centre, frame, half, inset, covered, cell_shape):
+def _row(tables: tuple, i: jax.Array) -> tuple:
+    """Row ``i`` of every array of a named tuple of tables."""
+    return jax.tree.map(lambda x: x[i], tables)
+
+
+def _first_state(chunk: Chunks, track: Tracks, board: Boards) -> jax.Array:
     """``crossing._first_crossing`` of one chunk of points along one track against one board."""
+    rest, mask = chunk
+    hinge, axis, pivot, values, count = track
+    centre, frame, half, inset, covered, cell_shape = board
     states = values.shape[0]
     live = jnp.arange(states) < count  # [S]
     rel = rest - pivot
