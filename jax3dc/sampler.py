@@ -8,8 +8,9 @@ prefill passes ``vision_window`` = the largest image's patch count so each image
 itself (full packed attention over a whole batch of images runs out of memory).
 
 Decoding follows ``DecodeOptions`` (``jax3dc.decoding``, beside the commands' decoding flags):
-structures under the structure grammar and part programs under the part-program grammar
-(``jax3dc.constrained``) unless ``constrained`` is off, and with
+under the grammar of the prompts' task (``jax3dc.constrained.task_constraint``) unless
+``constrained`` is off, structure replies rewritten afterwards by ``jax3dc.reply_rewrite`` (pivots
+back to absolute, scene grouping, grounding), and with
 ``candidates`` K > 1 each prompt's prompt pass is repeated into K rows: the first greedy, the
 others sampled (temperature, top-p), all in one batched decode.
 
@@ -34,18 +35,17 @@ import numpy as np
 from PIL import Image
 from tqdm import tqdm
 
-from jax3dc.constrained import parameters_constraint, program_constraint, structure_constraint
+from jax3dc.constrained import task_constraint
 from jax3dc.decoding import DecodeOptions
 from jax3dc.errors import InputFileError
 from jax3dc.generate import GenerationConfig, decode, left_pad, prefill, repeat_rows
-from jax3dc.grounding import ground_text
 from jax3dc.model.params import load_pretrained
 from jax3dc.processing.chat import encode_chat
 from jax3dc.processing.processor import ImageProcessorConfig, preprocess_images, smart_resize
 from jax3dc.processing.tokenizer import load_tokenizer
-from jax3dc.prompt import IMAGES_PER_TASK, chat_messages, code_messages, legend_boxes, parameters_messages
-from jax3dc.structure.box_frame import PivotFrame, text_to_absolute
-from jax3dc.structure.scene_grouping import regroup_text
+from jax3dc.prompt import IMAGES_PER_TASK, chat_messages, code_messages, parameters_messages
+from jax3dc.reply_rewrite import ReplyRewrite
+from jax3dc.structure.box_frame import PivotFrame
 
 
 class Example(Protocol):
@@ -179,50 +179,34 @@ class Sampler:
             prefilled = repeat_rows(prefilled, k)
         config = GenerationConfig(max_new_tokens=max_new_tokens, stop_ids=special.stop_ids, pad_id=special.endoftext,
                                   temperature=options.temperature if k > 1 else 0.0, top_p=options.top_p if k > 1 else 1.0)
-        constraint = None
         # Room per row: the decode's max_new_tokens, or less where the model's context ends first.
         context = self.config.text.max_position_embeddings
         room = [min(max_new_tokens, context - len(p.input_ids)) for p in rows for _ in range(k)]
-        tasks = {p.task for p in rows}
-        if options.constrained and len(tasks) > 1:
-            raise ValueError(f"one batch mixes tasks {sorted(tasks)}: each task has its own grammar")
-        if options.constrained and tasks == {"structure"}:
-            texts = [p.record.prompt for p in rows for _ in range(k)]
-            constraint = structure_constraint(self.tokenizer, self.config.text.vocab_size, texts,
-                                              [p.key for p in rows for _ in range(k)], room)
-        elif options.constrained and tasks == {"code"}:
-            constraint = program_constraint(self.tokenizer, self.config.text.vocab_size, len(rows) * k, room)
-        elif options.constrained and tasks == {"parameters"}:
-            if options.schemas is None:
-                raise ValueError("the parameters grammar needs DecodeOptions.schemas (the factories' schemas)")
-            constraint = parameters_constraint(options.schemas, self.tokenizer, self.config.text.vocab_size,
-                                               len(rows) * k)
+        constraint = None
+        if options.constrained:
+            tasks = {p.task for p in rows}
+            if len(tasks) > 1:
+                raise ValueError(f"one batch mixes tasks {sorted(tasks)}: each task has its own grammar")
+            constraint = task_constraint(rows[0].task, self.tokenizer, self.config.text.vocab_size,
+                                         [p.record.prompt for p in rows for _ in range(k)],
+                                         [p.key for p in rows for _ in range(k)], room, options.schemas)
         greedy = (np.arange(len(rows) * k) % k == 0) if k > 1 else None
         out = decode(self.model, prefilled, config, jax.random.key(options.seed), greedy, constraint)
         tokens, lengths, logprobs = np.asarray(out.tokens), np.asarray(out.lengths), np.asarray(out.logprobs)
+
+        rewrite = ReplyRewrite(self.pivot_frame, options.scene_grouping, options.grounding)
 
         def sample(i: int, boxes: dict | None) -> Sample:
             n = int(lengths[i])
             stopped = bool(n) and int(tokens[i, n - 1]) in special.stop_ids
             text, reply = self.tokenizer.decode(tokens[i, :n].tolist()), self.tokenizer.decode(tokens[i, :n - stopped].tolist())
             if boxes is not None:
-                text, reply = (text_to_absolute(t, boxes, self.pivot_frame) for t in (text, reply))
-                if options.scene_grouping:
-                    text, reply = (regroup_text(t, boxes) for t in (text, reply))
-                if options.grounding is not None:
-                    text, reply = (ground_text(t, boxes, options.grounding) for t in (text, reply))
+                text, reply = rewrite(text, boxes), rewrite(reply, boxes)
             return Sample(text, n, stopped, float(logprobs[i]), reply)
 
-        def pivot_boxes(prompt: Prompt) -> dict | None:
-            """The legend boxes box-frame pivots are read against, objects are grouped by and joints
-            are grounded in, parsed once for the prompt's K rows."""
-            if prompt.task != "structure" or (self.pivot_frame.name == "absolute" and not options.scene_grouping
-                                              and options.grounding is None):
-                return None
-            return legend_boxes(prompt.record.prompt)
-
         return [[sample(r * k + c, boxes) for c in range(k)]
-                for r, boxes in ((r, pivot_boxes(rows[r])) for r in range(len(prompts)))]
+                for r, boxes in ((r, rewrite.boxes(rows[r].record.prompt) if rows[r].task == "structure" else None)
+                                 for r in range(len(prompts)))]
 
 
 @dataclass

@@ -6,7 +6,8 @@ their part ids and joint counts set each row's registers; the tables are built o
 prompts (the same for every row: a program depends on no prompt text).
 ``parameters_constraint`` gives the grammar of factory parameter texts (jax3dc.parameters) for
 a batch of stage-1 parameter prompts, from the schemas the caller passes (the same for every row).
-Pass either to ``jax3dc.generate.decode(..., constraint=...)``.
+Pass either to ``jax3dc.generate.decode(..., constraint=...)``. ``task_constraint`` picks among
+them by the decode's task name.
 
 The promise: for any model and any logits, a row given at least the shortest document's tokens
 stops on a document that parses and validates against its prompt (see ``structure`` and
@@ -96,3 +97,20 @@ def parameters_constraint(schemas, tokenizer, vocab_size: int, rows: int):
 
 __all__ = ["Constraint", "Rows", "Tables", "min_tokens", "parameters_constraint", "program_constraint", "prompt_counts",
            "structure_constraint"]
+
+
+def task_constraint(task: str, tokenizer, vocab_size: int, prompts: Sequence[str], names: Sequence[str],
+                    room: Sequence[int], schemas=None) -> Constraint:
+    """The grammar of a batch of one ``task`` (the sampler's task names): "structure" (SPEC §2, set by
+    each row's prompt), "code" (part programs) or "parameters" (factory parameter texts of
+    ``schemas``, category -> Schema, which the caller must pass). ``prompts``, ``names`` and
+    ``room`` have one entry per row; the grammars that need no prompt read only their count."""
+    if task == "structure":
+        return structure_constraint(tokenizer, vocab_size, prompts, names, room)
+    if task == "code":
+        return program_constraint(tokenizer, vocab_size, len(prompts), room)
+    if task == "parameters":
+        if schemas is None:
+            raise ValueError("the parameters grammar needs DecodeOptions.schemas (the factories' schemas)")
+        return parameters_constraint(schemas, tokenizer, vocab_size, len(prompts))
+    raise ValueError(f"no grammar for task {task!r}: one of structure, code, parameters")
