@@ -56,6 +56,7 @@ QUIRKS = {
         "drawer_29557": "the range runs into the body: the drawer rests open",
     },
     "door in front of its body, swinging out in front of its hinge": {
+        "table_22433": "its three doors are flaps on the side PartNet-Mobility calls the back (+Y), hinged at the bottom",
         "table_23782": "its two doors are in the table's end (+X), not its front",
         "washing_machine_103508": "a top loader: its 'door' is a lid on top, hinged along one side",
     },
@@ -156,7 +157,7 @@ def _check(broken: set[str], prior: str, checked: int) -> None:
 
 
 def test_the_whole_pool_imports(imported):
-    assert len(imported) == 324
+    assert len(imported) == 337  # the pool's 328 objects and the nine fixtures
     assert len({o.object_id for o in imported}) == len(imported)
 
 
