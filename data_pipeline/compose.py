@@ -34,7 +34,7 @@ from typing import Callable
 import numpy as np
 import trimesh
 
-from data_pipeline.samples import SourceObject, derived_rng
+from data_pipeline.samples import SourceObject, derived_rng, normalised
 from jax3dc.factories.kit import GLASSES, METALS, PLASTICS, WOODS
 from jax3dc.relations import with_extracted_relations
 from jax3dc.structure import Joint, Material, Node, Structure
@@ -194,20 +194,8 @@ class _Parts:
 
     def normalised(self) -> tuple[Structure, dict[int, trimesh.Trimesh], float]:
         """Structure, meshes and metres per unit, the whole object centred with largest extent 1."""
-        lo = np.min([m.bounds[0] for m in self.meshes.values()], axis=0)
-        hi = np.max([m.bounds[1] for m in self.meshes.values()], axis=0)
-        centre, size = (lo + hi) / 2, float(np.max(hi - lo))
-        meshes = {pid: trimesh.Trimesh((m.vertices - centre) / size, m.faces, process=False)
-                  for pid, m in self.meshes.items()}
-        nodes = {}
-        for pid, node in self.nodes.items():
-            j = node.joint
-            if j is not None:
-                scale = size if j.type == "slide" else 1.0
-                j = replace(j, pivot=tuple(float(v) for v in (np.asarray(j.pivot) - centre) / size),
-                            range=(j.range[0] / scale, j.range[1] / scale))
-            nodes[pid] = replace(node, joint=j)
-        structure = Structure({mid: mat for mat, mid in self.materials.items()}, nodes)
+        structure, meshes, size = normalised(Structure({mid: mat for mat, mid in self.materials.items()}, self.nodes),
+                                             self.meshes)
         return with_extracted_relations(structure, meshes), meshes, size
 
 

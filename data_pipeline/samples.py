@@ -9,7 +9,7 @@ hidden ones, and ids still mean the same part in S, legend and target.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import trimesh
@@ -45,6 +45,25 @@ class SourceObject:
     granularity: str = "part"
     augmentation: str | None = None
     warnings: tuple[str, ...] = ()  # what an importer dropped or guessed; `data import` prints them once
+
+def normalised(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> tuple[Structure, dict[int, trimesh.Trimesh], float]:
+    """An object built in metres put in the normalised frame (bounding box centred, largest extent
+    1), with its pivots moved and its slide ranges scaled alike; also the metres per unit. Sources
+    that assemble objects from pieces (scenes, composed objects) end with it, as factories do."""
+    lo = np.min([m.bounds[0] for m in parts.values()], axis=0)
+    hi = np.max([m.bounds[1] for m in parts.values()], axis=0)
+    centre, size = (lo + hi) / 2.0, float((hi - lo).max())
+    out = {p: trimesh.Trimesh((m.vertices - centre) / size, m.faces, process=False) for p, m in parts.items()}
+    nodes = {}
+    for pid, n in structure.nodes.items():
+        j = n.joint
+        if j is not None:
+            scale = size if j.type == "slide" else 1.0
+            j = replace(j, pivot=tuple(float(v) for v in (np.asarray(j.pivot) - centre) / size),
+                        range=(j.range[0] / scale, j.range[1] / scale))
+        nodes[pid] = replace(n, joint=j)
+    return replace(structure, nodes=nodes), out, size
+
 
 def split_of(object_id: str) -> str:
     """train / val / test from SHA-256 of the object id: every view of an object lands together."""

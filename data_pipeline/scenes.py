@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 import trimesh
 
-from data_pipeline.samples import SourceObject, derived_rng, factory_source
+from data_pipeline.samples import SourceObject, derived_rng, factory_source, normalised
 from jax3dc.structure import Node, Relation, Structure
 
 FURNITURE = ("table", "desk", "cabinet", "nightstand", "cell_shelf", "simple_bookcase", "drawer_chest")
@@ -72,21 +72,6 @@ def _combine(objects: list[SourceObject], supports: list[tuple[int, int, int]]) 
     return Structure(materials=materials, nodes=nodes, relations=relations), parts, offsets
 
 
-def _normalised(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> tuple[Structure, dict, float]:
-    lo, hi = _bounds(parts)
-    centre, size = (lo + hi) / 2.0, float((hi - lo).max())
-    out = {p: trimesh.Trimesh((m.vertices - centre) / size, m.faces, process=False) for p, m in parts.items()}
-    nodes = {}
-    for pid, n in structure.nodes.items():
-        j = n.joint
-        if j is not None:
-            scale = size if j.type == "slide" else 1.0
-            j = replace(j, pivot=tuple(float(v) for v in (np.asarray(j.pivot) - centre) / size),
-                        range=(j.range[0] / scale, j.range[1] / scale))
-        nodes[pid] = replace(n, joint=j)
-    return replace(structure, nodes=nodes), out, size
-
-
 def object_level(structure: Structure, parts: dict[int, trimesh.Trimesh], objects: list[SourceObject],
                  offsets: list[int]) -> tuple[Structure, dict]:
     """Each object one rigid part (ids 1..K in object order); support relations kept per object."""
@@ -140,7 +125,7 @@ def make_scene(seed: int, index: int) -> list[SourceObject]:
             x += width + GAP_M
         placed.append(_metric(item, offset))
     structure, parts, offsets = _combine(placed, supports)
-    structure, parts_nu, size = _normalised(structure, parts)
+    structure, parts_nu, size = normalised(structure, parts)
     scene_id = f"scene_{seed:06d}_{index:06d}"
     part_scene = SourceObject("scene", scene_id, structure, parts_nu, size, granularity="part")
     obj_structure, obj_parts = object_level(structure, parts_nu, placed, offsets)
