@@ -24,16 +24,7 @@ snapshot() {
 }
 case "$1" in
 setup)  # wheels (scripts/gpu_carry.sh), the jax3dc entry points, GLVND's EGL, and whatever .carry/ brings
-  mkdir -p $R/site $R/carry
-  new=(); for w in .whl/*.whl; do [ -f "$w" ] || continue; grep -qxF "${w##*/}" $R/site/.wheels 2>/dev/null || new+=("$w"); done
-  if [ ${#new[@]} -gt 0 ]; then
-    pip install -q --no-deps --target $R/site "${new[@]}" 2>&1 | grep -v "as the 'root' user"
-    [ "${PIPESTATUS[0]}" -eq 0 ] && printf '%s\n' "${new[@]##*/}" >> $R/site/.wheels
-  fi
-  mkdir -p $R/site/jax3dc-0.dist-info && printf 'Metadata-Version: 2.1\nName: jax3dc\nVersion: 0\n' > $R/site/jax3dc-0.dist-info/METADATA
-  sed -n '/^\[project.entry-points."jax3dc.commands"\]/,/^$/p' pyproject.toml | sed 's/^\[project.entry-points."\(.*\)"\]/[\1]/; s/"//g' \
-      > $R/site/jax3dc-0.dist-info/entry_points.txt
-  [ -d $R/gl ] || for d in .gl/*.deb; do [ -f "$d" ] && dpkg -x "$d" $R/gl; done
+  bash scripts/gpu_host_setup.sh $R; mkdir -p $R/carry
   for t in .carry/*.tar.xz; do [ -f "$t" ] && tar xJf "$t" -C $R/carry; done
   [ -f .carry/src.tar.gz ] && cp .carry/src.tar.gz $R/carry/
   ls $R/carry; du -sh $R/carry/* 2>/dev/null ;;
