@@ -12,7 +12,7 @@
 #   src.tar.gz         `git archive HEAD` without its weights: long work runs from this snapshot of the
 #                      commit ($R/src, the weights copied in from the tree), never from the working tree a
 #                      call copies afresh (half-written files met a lazy import once: release 5's v3)
-# Usage: run.sh setup | data proc|real | start | wait MINUTES | pack OUTDIR
+# Usage: run.sh prepare (CPU machine) | setup | data proc|real | start | wait MINUTES | pack OUTDIR
 set -uo pipefail
 R=/tmp/r6
 export MUJOCO_GL=egl PYTHONUNBUFFERED=1 PYTHONPATH=$R/site LD_LIBRARY_PATH=$R/gl/usr/lib/x86_64-linux-gnu:${LD_LIBRARY_PATH:-}
@@ -23,6 +23,18 @@ snapshot() {
   cd $R/src
 }
 case "$1" in
+prepare)  # on the CPU machine: .carry/pool.tar.xz, real_parts.tar.xz and src.tar.gz (about 38 MB, one call)
+  P=$(mktemp -d); S=../shared
+  for d in $S/real_train/partnet_mobility/*/; do jax3dc data convert "$d" --out $P/conv/$(basename "$d") --quiet; done
+  for d in $S/fixtures/partnet_mobility/*/; do jax3dc data convert "$d" --out $P/fix/$(basename "$d") --quiet; done
+  python3 scripts/real_split.py $S/real_train/partnet_mobility --print heldout | xargs -n1 basename \
+      | grep -vx door_8867 > $P/heldout.txt
+  (python3 scripts/real_split.py $S/real_train/partnet_mobility --print train | xargs -n1 basename; echo door_8867) \
+      | sort > $P/train.txt
+  mkdir -p .carry; tar cf - -C $P conv fix train.txt heldout.txt | xz -T2 -6 > .carry/pool.tar.xz
+  tar cf - -C $S real_parts | xz -T2 -6 > .carry/real_parts.tar.xz
+  git archive HEAD | tar --delete --wildcards '*.safetensors' | gzip -9 > .carry/src.tar.gz
+  du -sh .carry/* ;;
 setup)  # wheels (scripts/gpu_carry.sh), the jax3dc entry points, GLVND's EGL, and whatever .carry/ brings
   bash scripts/gpu_host_setup.sh $R; mkdir -p $R/carry
   for t in .carry/*.tar.xz; do [ -f "$t" ] && tar xJf "$t" -C $R/carry; done
