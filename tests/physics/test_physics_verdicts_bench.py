@@ -1,5 +1,5 @@
-"""The ground-truth bench's per-object verdict lines (written as each object finishes) and the
-comparison of two such files (C against MJX)."""
+"""The ground-truth evaluator's per-object verdict lines (written as each object finishes) and the
+comparison of two such files (C against MJX, scripts/compare_verdicts.py)."""
 
 from __future__ import annotations
 
@@ -12,11 +12,11 @@ from pathlib import Path
 from jax3dc.factories import FACTORIES, generate_object
 from jax3dc.physics.verdict import check_object
 
-BENCH = Path(__file__).resolve().parents[2] / "bench"
+SCRIPTS = Path(__file__).resolve().parents[2] / "scripts"
 
 
 def _compare_module():
-    spec = importlib.util.spec_from_file_location("compare_verdicts", BENCH / "compare_verdicts.py")
+    spec = importlib.util.spec_from_file_location("compare_verdicts", SCRIPTS / "compare_verdicts.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -24,7 +24,7 @@ def _compare_module():
 
 def test_verdict_lines_hold_each_objects_check(tmp_path):
     out = tmp_path / "verdicts.jsonl"
-    subprocess.run([sys.executable, str(BENCH / "physics_ground_truth.py"), "--categories", "toilet,desk_fan",
+    subprocess.run([sys.executable, "-m", "eval.evaluate", "physics_ground_truth", "--categories", "toilet,desk_fan",
                     "--fixtures", "", "--no-mutations", "--workers", "2", "--verdicts", str(out)],
                    check=True, capture_output=True, text=True)
     records = {r["object"]: r for r in map(json.loads, out.read_text().splitlines())}
