@@ -19,7 +19,8 @@ from eval.metrics.cases import load_predictions
 from eval.metrics.parameters import score_parameters, summarise
 from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.factories.registry import SCHEMAS, run_parameters
-from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions
+from eval.generation import generate_predictions
+from jax3dc.sampler import DecodeOptions, Sampler
 
 COLUMNS = (("runs", "runs", 1), ("category", "category", 1), ("count_exact", "count exact", 1),
            ("matched_iou", "matched part-box IoU", 1), ("ids", "ids", 1), ("box_iou", "part-box IoU by id", 1),

@@ -63,8 +63,9 @@ def run_eval(args: argparse.Namespace) -> int:
         use_compile_cache(args.compile_cache)
     # lazy: `jax3dc --help` imports this module; the decoder costs it 37 ms more, the report (overlays,
     # viewers, the part rebuilder) 43 ms
-    from jax3dc.sampler import Sampler, generate_predictions
+    from eval.generation import generate_predictions
     from eval.report import write_report
+    from jax3dc.sampler import Sampler
 
     sources = [args.predictions is not None, args.reference_as_prediction, args.checkpoint is not None]
     if sum(sources) > 1:
@@ -140,7 +141,8 @@ def run_eval(args: argparse.Namespace) -> int:
 
 def _run_code(args: argparse.Namespace, records: list, out: Path) -> int:
     """The code task: programs from the checkpoint (or --predictions, or the records' own), scored."""
-    from jax3dc.sampler import Sampler, generate_predictions  # lazy: as in run_eval (37 ms)
+    from eval.generation import generate_predictions  # lazy: as in run_eval (37 ms)
+    from jax3dc.sampler import Sampler  # lazy: as in run_eval
 
     if args.candidates > 1 or args.repair:
         raise Jax3dcError("--candidates and --repair choose structures; the code task takes neither")

@@ -23,7 +23,7 @@ from tqdm import tqdm
 
 from data_pipeline.record import Record
 from data_pipeline.record_parts import record_parts
-from jax3dc.sampler import read_predictions_file
+from eval.generation import read_predictions_file
 from jax3dc.structure import boxes_from_dict, to_json
 from jax3dc.verify.pool import Job, verify_many
 from jax3dc.verify.select import Candidate

@@ -36,7 +36,8 @@ from data_pipeline.record import Record  # noqa: E402
 from data_pipeline.shards import shard_paths  # noqa: E402
 from eval.baselines import heuristic  # noqa: E402
 from eval.records import read_records, reference_of  # noqa: E402
-from jax3dc.sampler import DecodeOptions, Sampler, generate_predictions  # noqa: E402
+from eval.generation import generate_predictions  # noqa: E402
+from jax3dc.sampler import DecodeOptions, Sampler  # noqa: E402
 from eval.metrics.cases import build_cases  # noqa: E402
 from eval.metrics.score import evaluate  # noqa: E402
 from eval.metrics.tables import format_tables  # noqa: E402
