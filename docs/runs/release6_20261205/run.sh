@@ -40,8 +40,8 @@ setup)  # wheels (scripts/gpu_carry.sh), the jax3dc entry points, GLVND's EGL, a
   for t in .carry/*.tar.xz; do [ -f "$t" ] && tar xJf "$t" -C $R/carry; done
   [ -f .carry/src.tar.gz ] && cp .carry/src.tar.gz $R/carry/
   ls $R/carry; du -sh $R/carry/* 2>/dev/null ;;
-data)  # run.sh data proc | real: rendered in the background, in a session of its own (a call's end must not
-        # end it), from a copy of this script; each chain writes its markers to $R/done
+data)  # run.sh data proc | real: rendered in the background, in a process group of its own (the end of the
+        # command that started it must not end it), from a copy of this script; each chain writes its markers to $R/done
   snapshot; cp "$OLDPWD/$0" $R/run.sh 2>/dev/null || cp "$0" $R/run.sh
   setsid nohup bash $R/run.sh _$2 < /dev/null > $R/data_$2.log 2>&1 &
   echo "data $2 started" ;;
