@@ -12,6 +12,7 @@ from jax3dc.errors import InputFileError
 from jax3dc.processing.processor import MIN_IMAGE_SIDE
 
 SPLIT_CHOICES = ("hash", "train", "val", "test")  # data_pipeline.build.SPLIT_CHOICES (not imported: keeps --help fast)
+APPEARANCE_CHOICES = ("plain", "varied", "mixed")  # data_pipeline.samples.BUILD_APPEARANCES (not imported: as above)
 
 BUILD_DESCRIPTION = """\
 Render procedural objects into ArrayRecord shards of training records (SPEC §4).
@@ -58,7 +59,7 @@ def _common(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--augment", action="store_true",
                         help="also render a split variant (an articulated leaf cut in two) and a merge variant "
                         "(two compatible sibling leaves joined) of each object, one view each")
-    parser.add_argument("--appearance", choices=("plain", "varied", "mixed"), default="plain",
+    parser.add_argument("--appearance", choices=APPEARANCE_CHOICES, default="plain",
                         help="look of the images I (S is the same either way): plain = one lighting, black "
                         "background, material colours, fixed field of view (default); varied = random lights, "
                         "sky / floor, jittered part colours and textures, camera distance and field of view, "

@@ -46,6 +46,7 @@ class SourceObject:
     augmentation: str | None = None
     warnings: tuple[str, ...] = ()  # what an importer dropped or guessed; `data import` prints them once
 
+
 def normalised(structure: Structure, parts: dict[int, trimesh.Trimesh]) -> tuple[Structure, dict[int, trimesh.Trimesh], float]:
     """An object built in metres put in the normalised frame (bounding box centred, largest extent
     1), with its pivots moved and its slide ranges scaled alike; also the metres per unit. Sources

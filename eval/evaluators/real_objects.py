@@ -172,8 +172,8 @@ def score(refs: Sequence[Reference], preds: Mapping[str, Any], records: Sequence
     if records and kind_of(records[0]) != "scene":
         category = {r.key: str(r.meta.get("category")) for r in records}
         out["per_category"] = breakdown(cases, evaluation.rows, category)
-        out["door_like"] = breakdown(cases, evaluation.rows, {k: str(c in DOOR_LIKE) for k, c in category.items()}).get(
-            "True")
+        kinds = {k: "door-like" if c in DOOR_LIKE else "other" for k, c in category.items()}
+        out["door_like"] = breakdown(cases, evaluation.rows, kinds).get("door-like")
         out["all_joints"] = breakdown(cases, evaluation.rows, {k: "all" for k in category})["all"]
         out["per_look"] = breakdown(cases, evaluation.rows, {r.key: str(r.meta.get("appearance") or "plain")
                                                              for r in records})

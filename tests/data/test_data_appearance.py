@@ -179,3 +179,10 @@ def test_mixed_views_are_each_the_plain_or_the_varied_view():
         assert (record.image_png, record.seg_png) == (looks[look][view].image_png, looks[look][view].seg_png)
         assert record.target == looks["plain"][view].target  # the same pose in either look
     assert seen == {"plain", "varied"}
+
+
+def test_the_command_offers_every_build_look():
+    """`data build/import --appearance` lists its choices without importing the renderer (fast --help)."""
+    from data_pipeline.build_cli import APPEARANCE_CHOICES
+    from data_pipeline.samples import BUILD_APPEARANCES
+    assert APPEARANCE_CHOICES == BUILD_APPEARANCES
