@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 import trimesh
 
-from jax3dc.factories import appliances, furniture, household, shelves, small_objects, storage
+from jax3dc.factories import appliances, devices, furniture, household, mechanisms, shelves, small_objects, storage
 from jax3dc.factories.writer import Normalised, ProgramWriter
 from jax3dc.errors import Jax3dcError
 from jax3dc.mounted import MOUNTED_CATEGORIES
@@ -85,6 +85,8 @@ _BUILDS: dict[str, tuple[Build, Schema]] = {
     "printer": (small_objects.printer, small_objects.PRINTER),
     "toaster": (small_objects.toaster, small_objects.TOASTER),
     "stapler": (small_objects.stapler, small_objects.STAPLER),
+    **devices.BUILDS,
+    **mechanisms.BUILDS,
 }
 _SHELVES: dict[str, tuple[Build, Schema]] = {
     "cell_shelf": (shelves.cell_shelf, shelves.CELL_SHELF),
