@@ -19,7 +19,7 @@ import sys
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 from tqdm import tqdm
 
@@ -31,7 +31,7 @@ from data_pipeline.mirror import mirrored
 from data_pipeline.samples import BUILD_APPEARANCES, SourceObject, derived_rng, factory_source, object_records, split_of
 from data_pipeline.scenes import make_scene
 from data_pipeline.shards import SHARD_SUFFIX, finished, load_manifest, save_manifest, write_shard
-from jax3dc.errors import InputFileError, SetupError
+from jax3dc.errors import InputFileError, Jax3dcError, SetupError
 from jax3dc.factories import FACTORIES, object_id
 
 
@@ -71,10 +71,16 @@ class BuildConfig:
 SPLIT_CHOICES = ("hash", "train", "val", "test")
 
 
-def factory_sources(n: int, seed: int) -> list[SourceSpec]:
-    """``n`` factory objects cycling through the categories; object k of the build has seed
-    ``seed * 1_000_000 + k``, so two builds with different seeds share no object."""
-    categories = list(FACTORIES)
+def factory_sources(n: int, seed: int, categories: Sequence[str] | None = None) -> list[SourceSpec]:
+    """``n`` factory objects cycling through ``categories`` (default: every factory, in registry
+    order); object k of the build has seed ``seed * 1_000_000 + k``, so two builds with different
+    seeds share no object. Naming categories lets a build add families a dataset lacks (new
+    factories) without rendering every other family again."""
+    categories = list(FACTORIES) if categories is None else list(categories)
+    unknown = [c for c in categories if c not in FACTORIES]
+    if unknown or not categories:
+        raise Jax3dcError(f"unknown categories {', '.join(map(repr, unknown))}; known: {', '.join(FACTORIES)}"
+                          if unknown else "no categories named")
     out = []
     for k in range(n):
         category, obj_seed = categories[k % len(categories)], seed * 1_000_000 + k

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 from data_pipeline.card import dataset_card
-from jax3dc.errors import InputFileError
+from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.processing.processor import MIN_IMAGE_SIDE
 
 SPLIT_CHOICES = ("hash", "train", "val", "test")  # data_pipeline.build.SPLIT_CHOICES (not imported: keeps --help fast)
@@ -80,6 +80,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                                   description=BUILD_DESCRIPTION,
                                   formatter_class=argparse.RawDescriptionHelpFormatter)
     build.add_argument("--objects", type=int, required=True, help="number of factory objects (cycling categories)")
+    build.add_argument("--categories", metavar="NAMES", default=None,
+                       help="comma-separated factory categories to cycle through (default: every factory), "
+                       "e.g. camera,knife to add new families to a dataset without rendering the others")
     build.add_argument("--composed", type=int, default=0,
                        help="number of objects composed from the real part meshes of --parts: bodies, doors, "
                        "drawers, flaps and lids laid out anew, hinges on the edge away from the handle (default 0)")
@@ -148,7 +151,12 @@ def run_build_command(args: argparse.Namespace) -> int:
         except FileNotFoundError as e:
             raise InputFileError(args.parts, str(e)) from None
         composed = composed_sources(args.composed, args.seed, args.parts)
-    return _run(args, factory_sources(args.objects, args.seed) + scene_sources(args.scenes, args.seed) + composed)
+    categories = None if args.categories is None else [c.strip() for c in args.categories.split(",") if c.strip()]
+    try:
+        factories = factory_sources(args.objects, args.seed, categories)
+    except Jax3dcError as e:
+        raise SystemExit(f"--categories: {e}") from None
+    return _run(args, factories + scene_sources(args.scenes, args.seed) + composed)
 
 
 def run_import_command(args: argparse.Namespace) -> int:

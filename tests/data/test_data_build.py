@@ -106,6 +106,22 @@ def test_build_cli_objects_and_scenes(tmp_path):
     assert [r.key for r in read_dataset(tmp_path)] == [r.key for r in records]
 
 
+def test_named_categories_cycle_and_unknown_ones_are_refused(tmp_path, capsys):
+    from jax3dc.cli import main
+
+    sources = factory_sources(5, 3, ["laptop", "safe"])
+    assert [s.category for s in sources] == ["laptop", "safe", "laptop", "safe", "laptop"]
+    assert [s.seed for s in sources] == [3_000_000 + k for k in range(5)]  # as in a build of every category
+    with pytest.raises(SystemExit, match="'toaster_oven'"):
+        main(["data", "build", "--out", str(tmp_path / "x"), "--objects", "2", "--categories", "laptop,toaster_oven"])
+    assert not (tmp_path / "x").exists()  # refused before anything is written
+    with pytest.raises(SystemExit, match="no categories"):
+        main(["data", "build", "--out", str(tmp_path / "y"), "--objects", "2", "--categories", " , "])
+    assert main(["data", "build", "--out", str(tmp_path / "z"), "--objects", "2", "--categories", "laptop",
+                 "--views", "1", "--size", "32", "--quiet"]) == 0
+    assert [r.key.split("/")[0] for r in read_dataset(tmp_path / "z")] == ["laptop", "laptop"]
+
+
 def test_plan_with_a_fixed_split_puts_every_object_there():
     sources = factory_sources(12, 0)
     assert {split_of(s.object_id) for s in sources} != {"val"}  # hashing alone would spread them
