@@ -12,7 +12,7 @@ from jax3dc.errors import InputFileError, Jax3dcError
 from jax3dc.processing.processor import MIN_IMAGE_SIDE
 
 SPLIT_CHOICES = ("hash", "train", "val", "test")  # data_pipeline.build.SPLIT_CHOICES (not imported: keeps --help fast)
-APPEARANCE_CHOICES = ("plain", "varied", "mixed")  # data_pipeline.samples.BUILD_APPEARANCES (not imported: as above)
+APPEARANCE_CHOICES = ("plain", "varied", "photo", "mixed", "all")  # data_pipeline.samples.BUILD_APPEARANCES (not imported: as above)
 
 BUILD_DESCRIPTION = """\
 Render procedural objects into ArrayRecord shards of training records (SPEC §4).
@@ -63,8 +63,10 @@ def _common(parser: argparse.ArgumentParser) -> None:
                         help="look of the images I (S is the same either way): plain = one lighting, black "
                         "background, material colours, fixed field of view (default); varied = random lights, "
                         "sky / floor, jittered part colours and textures, camera distance and field of view, "
-                        "all from the build seed; mixed = each view plain or varied with equal odds, so that "
-                        "no look marks where an object comes from")
+                        "all from the build seed; photo = varied, then exposure, white balance, blur, noise, "
+                        "vignetting, resizing and JPEG as a camera and a file leave a photo; mixed = each view "
+                        "plain or varied with equal odds, so that no look marks where an object comes from; "
+                        "all = each view plain, varied or photo with equal odds")
     parser.add_argument("--mirror", action="store_true",
                         help="also render every view of each object's mirror image (x -> -x; hinges change side)")
     parser.add_argument("--fuse-handles", action="store_true",

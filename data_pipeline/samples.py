@@ -4,6 +4,11 @@ Occluded parts: the legend and the target always list every part of the object (
 from the stage-1 parts, which exist whether or not a camera sees them); a part no pixel of S
 shows is listed in ``meta["hidden_parts"]``. So the regions of S are exactly the parts minus the
 hidden ones, and ids still mean the same part in S, legend and target.
+
+Part names: ``meta["part_names"]`` maps part id -> the source's semantic name (a factory's
+``freezer_door``, PartNet-Mobility's ``rotation_door``, a composed object's part), for the parts
+that have one; the slots network's kind targets read it (``jax3dc.stage1_slots.kinds``). Records
+built before it existed have none, and their parts count as kind ``other``.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import trimesh
 
+from data_pipeline.photo import degrade
 from data_pipeline.record import Record
 from data_pipeline.views import sample_view_pose
 from jax3dc.factories import generate_object
@@ -28,7 +34,8 @@ from jax3dc.relations import with_extracted_relations
 from jax3dc.structure import Structure, boxes_to_dict, canonicalize, to_json
 
 SPLITS = (("train", 0.90), ("val", 0.95), ("test", 1.0))
-BUILD_APPEARANCES = (*APPEARANCES, "mixed")  # the renderer's looks, and a build's per-view mix of them
+BUILD_APPEARANCES = (*APPEARANCES, "photo", "mixed", "all")  # the renderer's looks, a degraded varied one, two per-view mixes
+VARIED_LOOKS = ("varied", "photo")  # rendered by the varied renderer and camera
 
 
 @dataclass(frozen=True)
@@ -97,7 +104,9 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
     varied view equals the plain S of the same pose and camera. "mixed": each view plain or
     varied with equal odds (its own generator), so that every source is seen in both looks and the
     look cannot tell a model which domain (factory or real) an object comes from; a plain view of
-    a mixed build is byte for byte the plain build's, a varied one the varied build's.
+    a mixed build is byte for byte the plain build's, a varied one the varied build's. "photo": the
+    varied view through a camera's and a file's degradations (``data_pipeline.photo``), I only.
+    "all": each view plain, varied or photo with equal odds.
 
     ``palette_per_view``: each view's S and legend take the palette of its own key (a training
     augmentation: colours then name no object, so a model cannot recall an answer by them)."""
@@ -108,26 +117,28 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
     palette = object_palette(obj.category, obj.object_id)
     rgba, lighting = part_rgba(obj.structure, rng), sample_lighting(rng)  # drawn in both looks: same poses after
     looks = view_looks(keys, views, appearance)
-    look = sample_appearance(obj.structure, derived_rng(*keys, "appearance")) if "varied" in looks else None
-    renderers: dict[str, PartRenderer] = {}  # made on first use: a mixed object may need both
+    look = sample_appearance(obj.structure, derived_rng(*keys, "appearance")) if set(looks) & set(VARIED_LOOKS) else None
+    renderers: dict[bool, PartRenderer] = {}  # plain or varied, made on first use: a mixed object may need both
     try:
         records = []
         for view in range(views):
-            if looks[view] not in renderers:
-                renderers[looks[view]] = PartRenderer(obj.parts, rgba, lighting, size,
-                                                      look if looks[view] == "varied" else None)
-            renderer = renderers[looks[view]]
+            varied = looks[view] in VARIED_LOOKS
+            if varied not in renderers:
+                renderers[varied] = PartRenderer(obj.parts, rgba, lighting, size, look if varied else None)
+            renderer = renderers[varied]
             posed = sample_view_pose(obj.structure, obj.parts, view, rng)
             lo = np.min([m.bounds[0] for m in posed.parts.values()], axis=0)
             hi = np.max([m.bounds[1] for m in posed.parts.values()], axis=0)
             radius = float(np.linalg.norm(hi - lo)) / 2.0
             camera = sample_camera(rng, centre=(lo + hi) / 2.0, radius=radius)
             view_lighting = None
-            if looks[view] == "varied":
+            if varied:
                 view_rng = derived_rng(*keys, "appearance", view)
                 camera = vary_camera(camera, radius, view_rng)
                 view_lighting = sample_view_lighting(view_rng)
             rgb, ids = renderer.render(posed.poses, camera, view_lighting)
+            if looks[view] == "photo":
+                rgb = degrade(rgb, derived_rng(*keys, "photo", view))
             boxes = part_boxes(posed.parts)
             structure = canonicalize(with_extracted_relations(posed.structure, posed.parts), boxes)
             visible = set(np.unique(ids).tolist()) - {0}
@@ -142,6 +153,9 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
                 "moved_joint": posed.moved_joint, "theta": round(posed.theta, 4),
                 "hidden_parts": sorted(set(obj.parts) - visible), "size": size,
             }
+            names = {str(pid): node.name for pid, node in sorted(structure.nodes.items()) if node.name}
+            if names:  # the parts' semantic names (stage 1's kinds); absent where the source names none
+                meta["part_names"] = names
             if appearance != "plain":
                 meta["appearance"] = looks[view]
             if palette_per_view:
@@ -158,8 +172,12 @@ def object_records(obj: SourceObject, views: int, seed: int, size: int, split: s
 
 
 def view_looks(keys: tuple, views: int, appearance: str) -> list[str]:
-    """The look ("plain" or "varied") of each view; "mixed" draws each from the object's keys and
-    the view number alone, so a view's look never depends on how many views are made."""
-    if appearance != "mixed":
-        return [appearance] * views
-    return ["varied" if derived_rng(*keys, "look", view).random() < 0.5 else "plain" for view in range(views)]
+    """The look of each view; "mixed" draws plain or varied and "all" plain, varied or photo, each
+    with equal odds, from the object's keys and the view number alone, so a view's look never
+    depends on how many views are made (and a mixed build's views stay what they were before
+    "all" existed)."""
+    if appearance == "mixed":
+        return ["varied" if derived_rng(*keys, "look", view).random() < 0.5 else "plain" for view in range(views)]
+    if appearance == "all":
+        return [("plain", "varied", "photo")[int(derived_rng(*keys, "look", view).random() * 3)] for view in range(views)]
+    return [appearance] * views

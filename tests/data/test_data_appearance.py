@@ -186,3 +186,38 @@ def test_the_command_offers_every_build_look():
     from data_pipeline.build_cli import APPEARANCE_CHOICES
     from data_pipeline.samples import BUILD_APPEARANCES
     assert APPEARANCE_CHOICES == BUILD_APPEARANCES
+
+
+def test_photo_views_are_the_varied_views_degraded_and_all_mixes_three_looks():
+    """A photo view is the varied view (same camera, same S, same target) with only I degraded;
+    "all" shows each view in one of the three looks, each byte for byte that look's build's view."""
+    obj = source("cabinet")
+    looks = {name: object_records(obj, views=6, seed=5, size=SIZE, appearance=name)  # seed 5: all three looks
+             for name in ("plain", "varied", "photo", "all")}
+    for v, ph in zip(looks["varied"], looks["photo"]):
+        assert ph.meta["appearance"] == "photo" and ph.meta["camera"] == v.meta["camera"]
+        assert (ph.seg_png, ph.target, ph.prompt) == (v.seg_png, v.target, v.prompt)
+        assert ph.image_png != v.image_png
+    seen = set()
+    for view, record in enumerate(looks["all"]):
+        look = record.meta["appearance"]
+        seen.add(look)
+        assert (record.image_png, record.seg_png) == (looks[look][view].image_png, looks[look][view].seg_png)
+    assert seen == {"plain", "varied", "photo"}
+
+
+def test_degrade_is_deterministic_keeps_the_frame_and_refuses_other_images():
+    from data_pipeline.photo import degrade
+
+    rng = np.random.default_rng(0)
+    rgb = rng.integers(0, 256, (SIZE, SIZE + 8, 3), dtype=np.uint8)
+    outs = [degrade(rgb, derived_rng("photo-test", k)) for k in range(12)]
+    assert all(o.shape == rgb.shape and o.dtype == np.uint8 for o in outs)
+    np.testing.assert_array_equal(outs[0], degrade(rgb, derived_rng("photo-test", 0)))
+    assert sum(not np.array_equal(o, rgb) for o in outs) == len(outs)
+    assert len({o.tobytes() for o in outs}) == len(outs)
+    flat = np.full((SIZE, SIZE, 3), 128, np.uint8)  # a mid-grey stays a picture of mid-grey, not of noise
+    assert all(abs(float(degrade(flat, derived_rng("flat", k)).mean()) - 128) < 70 for k in range(8))
+    for bad in (rgb[..., 0], rgb.astype(np.float32), rgb[..., :2]):
+        with pytest.raises(ValueError, match="uint8"):
+            degrade(bad, rng)
