@@ -90,7 +90,7 @@ class BatchItem:
     skipped: bool = False  # done by an earlier run
 
 
-def _digest(path: Path) -> str:
+def image_digest(path: Path) -> str:
     try:
         return hashlib.sha256(path.read_bytes()).hexdigest()
     except OSError as e:
@@ -106,17 +106,21 @@ def _card(folder: Path, image: str) -> Card:
     return Card(folder.name, image, PASSES if ok else FAILS, f"{len(nodes)} parts, {joints} joints")
 
 
-def _done_card(folder: Path, digest: str) -> Card | None:
-    """The card of a folder an earlier run completed for these input bytes, else None."""
+def done_card(folder: Path, digest: str | None = None) -> Card | None:
+    """The card of a folder an earlier run completed (for these input bytes, when ``digest`` is
+    given), else None; `jax3dc serve` shows the folders it finds done in its --out as done jobs."""
     try:
         done = json.loads((folder / DONE_FILE).read_text(encoding="utf-8"))
-        return _card(folder, str(done["image"])) if done["image_sha256"] == digest else None
+        return _card(folder, str(done["image"])) if digest is None or done["image_sha256"] == digest else None
     except (OSError, ValueError, KeyError, TypeError, AttributeError):
         return None
 
 
-def _predict_one(image: Path, name: str, digest: str, config: PredictConfig, out: Path,
-                 checkpoints: Checkpoints) -> Card:
+def predict_one(image: Path, name: str, digest: str, config: PredictConfig, out: Path,
+                checkpoints: Checkpoints) -> Card:
+    """Predicts ``image`` (of sha256 ``digest``) into ``out``/``name`` from scratch and writes
+    done.json last; its card, with the error when it failed. The batch and `jax3dc serve`'s worker
+    predict each image through it."""
     folder = out / name
     if folder.exists():
         shutil.rmtree(folder)  # a prediction cut short, or of other input bytes: done again from scratch
@@ -147,9 +151,9 @@ def predict_batch(images: Sequence[Path], config: PredictConfig, out: str | Path
     try:
         for k, (image, name) in enumerate(zip(images, names)):
             bar.set_postfix_str(name)
-            digest = _digest(image)
-            done = _done_card(out / name, digest)
-            cards[k] = done or _predict_one(image, name, digest, config, out, checkpoints)
+            digest = image_digest(image)
+            done = done_card(out / name, digest)
+            cards[k] = done or predict_one(image, name, digest, config, out, checkpoints)
             item = BatchItem(image, out / name, cards[k], skipped=done is not None)
             items.append(item)
             write_gallery(cards, out)

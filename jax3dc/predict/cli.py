@@ -58,16 +58,22 @@ CAMERA_HELP = ("JSON file with the image's camera in the normalised object frame
                "under \"camera\" also works. Default: a front view from slightly above that fits the object")
 
 
-def run(args: argparse.Namespace) -> int:
-    apply_gpu_defaults(GENERATION_GPU_FLAGS)  # before the backend starts
+def predict_config(args: argparse.Namespace) -> PredictConfig:
+    """The PredictConfig of the options ``add_predict_options`` declared (`jax3dc predict` and
+    `jax3dc serve` take the same ones); sets the GPU defaults first, before the backend starts."""
+    apply_gpu_defaults(GENERATION_GPU_FLAGS)
     # lazy: the models, decoding and exporters: 0.25 s on top of `jax3dc --help`, which imports this module
     from jax3dc.predict.pipeline import PredictConfig
 
     camera = load_camera(args.camera) if args.camera else None
     stage1 = Stage1Config(args.stage1, args.stage1_model, args.code_model, args.mesh_up)
-    config = PredictConfig(stage1, args.structure_model, decoding=decoding_from_args(args), camera=camera,
-                           scale=args.scale, mounted=args.mounted, num_joints=args.joints,
-                           max_image_pixels=args.max_image_pixels)
+    return PredictConfig(stage1, args.structure_model, decoding=decoding_from_args(args), camera=camera,
+                         scale=args.scale, mounted=args.mounted, num_joints=args.joints,
+                         max_image_pixels=args.max_image_pixels)
+
+
+def run(args: argparse.Namespace) -> int:
+    config = predict_config(args)
     if len(args.image) == 1 and not Path(args.image[0]).is_dir():
         return _run_one(args.image[0], config, args.out)
     return _run_batch(args.image, config, args.out)
@@ -115,6 +121,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("image", nargs="+", metavar="IMAGE",
                    help="the input image (PNG, JPEG, ...); several, or a folder of them, for a batch")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="folder for the outputs (created if missing); for a batch, the folder of the images' folders "
+                        "and index.html")
+    add_predict_options(p)
+    p.set_defaults(func=run)
+
+
+def add_predict_options(p: argparse.ArgumentParser) -> None:
+    """The options that make a PredictConfig (``predict_config``): the models, the camera, scale,
+    decoding and image limit; `jax3dc serve` declares the same ones, so a server predicts as the
+    command does."""
     p.add_argument("--stage1", metavar="|".join(b.usage for b in BACKENDS.values()),
                    help="where the part meshes come from: one of the stage-1 backends listed below (default: "
                         "parameters when a stage-1 model is given or ships)")
@@ -127,9 +144,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--code-model", metavar="DIR",
                    help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
     p.add_argument("--camera", metavar="FILE", help=CAMERA_HELP)
-    p.add_argument("--out", required=True, metavar="DIR",
-                   help="folder for the outputs (created if missing); for a batch, the folder of the images' folders "
-                        "and index.html")
     p.add_argument("--scale", type=float, metavar="M_PER_NU",
                    help="metres per normalised unit for the exports (default: the mesh file's units, "
                         "taken as metres; 1.0 for --stage1 code)")
@@ -150,4 +164,3 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                         "category (faucet, toilet, door, window), else not)")
     p.add_argument("--max-image-pixels", type=positive_int, default=MAX_IMAGE_PIXELS, metavar="N",
                    help="refuse an image of more pixels, read from its header before decoding (default: %(default)s)")
-    p.set_defaults(func=run)
