@@ -38,28 +38,21 @@ def _numbers(values) -> str:
 def describe(folder: Path) -> list[str]:
     """One line per part: its parent and joint, and the named lines along its axis (the one it is
     on marked with *), so a person can write a patch."""
-    from jax3dc.edits.folder import load_object  # lazy: the exporters and physics (0.15 s), see run
-    from jax3dc.edits.lines import axis_name, hinge_lines, line_at  # lazy: the grounding package (50 ms)
-    from jax3dc.geometry.parts import part_boxes  # lazy: trimesh, as the two above
+    from jax3dc.edits.folder import joint_rows, load_object  # lazy: the exporters and physics (0.15 s), see run
 
-    obj = load_object(folder)
-    boxes = part_boxes(obj.parts)
     lines = []
-    for pid, node in sorted(obj.structure.nodes.items()):
-        label = f"part {pid}" + (f" ({obj.context.names[pid]})" if pid in obj.context.names else "")
-        joint = node.joint
-        if node.parent is None:
+    for row in joint_rows(load_object(folder)):
+        label = f"part {row.part}" + (f" ({row.name})" if row.name is not None else "")
+        if row.type == "root":
             lines.append(f"{label}: root")
             continue
-        if joint is None:
-            lines.append(f"{label}: fixed to part {node.parent}")
+        if row.type == "fixed":
+            lines.append(f"{label}: fixed to part {row.parent}")
             continue
-        axis = axis_name(joint.axis) or _numbers(joint.axis)
-        on = line_at(boxes[pid], joint.axis, joint.pivot)
-        unit = "rad" if joint.type == "hinge" else "nu"
-        lines.append(f"{label}: {joint.type} on part {node.parent}, axis {axis}, line "
-                     f"{on or 'through ' + _numbers(joint.pivot)}, range {_numbers(joint.range)} {unit}")
-        names = [name + ("*" if name == on else "") for name in hinge_lines(boxes[pid], joint.axis)]
+        unit = "rad" if row.type == "hinge" else "nu"
+        lines.append(f"{label}: {row.type} on part {row.parent}, axis {row.axis_name or _numbers(row.axis)}, line "
+                     f"{row.line or 'through ' + _numbers(row.pivot)}, range {_numbers(row.range)} {unit}")
+        names = [name + ("*" if name == row.line else "") for name in row.lines_along_axis()]
         if names:
             lines.append("    lines: " + ", ".join(names))
     return lines

@@ -22,6 +22,7 @@ from pathlib import Path
 import trimesh
 from PIL import Image
 
+from jax3dc.edits.lines import AXES, LETTERS, axis_name, box_direction, hinge_lines, line_at
 from jax3dc.edits.patch import Patch, edit_structure
 from jax3dc.edits.staging import folder_lock, staged
 from jax3dc.errors import InputFileError
@@ -77,6 +78,47 @@ def load_object(folder: str | Path) -> PredictedObject:
     if not path.is_file():
         raise InputFileError(path, "not found: the prediction has no structure to edit (see report.html for why)")
     return PredictedObject(folder, parse_structure(_read(path), part_ids=parts), parts, context)
+
+
+@dataclass(frozen=True)
+class JointRow:
+    """One part's joint as a person edits it (`jax3dc edit DIR` prints these; `jax3dc serve`'s
+    form shows them): ``type`` is hinge, slide, fixed (to its parent) or root; ``axis_name`` and
+    ``line`` name the axis and the hinge line when they are named ones (``jax3dc.edits.lines``),
+    and ``lines`` lists the named lines of the part's box along each box direction (x, y, z)."""
+
+    part: int
+    name: str | None
+    parent: int | None
+    type: str
+    axis: tuple[float, float, float] | None
+    axis_name: str | None
+    pivot: tuple[float, float, float] | None
+    line: str | None
+    range: tuple[float, float] | None
+    lines: dict[str, list[str]]
+
+    def lines_along_axis(self) -> list[str]:
+        """The named lines along the joint's axis (none for a free axis or no joint)."""
+        k = box_direction(self.axis) if self.axis is not None else None
+        return [] if k is None else self.lines[LETTERS[k]]
+
+
+def joint_rows(obj: PredictedObject) -> list[JointRow]:
+    """Every part's ``JointRow``, by part id."""
+    boxes = part_boxes(obj.parts)
+    rows = []
+    for pid, node in sorted(obj.structure.nodes.items()):
+        lines = {letter: list(hinge_lines(boxes[pid], AXES["+" + letter])) for letter in LETTERS}
+        joint = node.joint
+        kind = "root" if node.parent is None else ("fixed" if joint is None else joint.type)
+        rows.append(JointRow(
+            pid, obj.context.names.get(pid), node.parent, kind,
+            None if joint is None else tuple(joint.axis), None if joint is None else axis_name(joint.axis),
+            None if joint is None else tuple(joint.pivot),
+            None if joint is None else line_at(boxes[pid], joint.axis, joint.pivot),
+            None if joint is None else tuple(joint.range), lines))
+    return rows
 
 
 def _write_files(obj: PredictedObject, structure: Structure, entry: dict, out: Path, wrote: OutputListener) -> Verdict:
