@@ -225,6 +225,39 @@ class ProgramWriter:
         return self.call("scale", Arg(None, mesh, PLAIN), Arg(None, tuple(factor), PLAIN),
                          Arg("center", tuple(center), POINT))
 
+    def turn_about_z(self, quarter_turns: int) -> None:
+        """Turns everything written so far by `quarter_turns` x 90 degrees about +Z through the
+        metric origin: each part's mesh by a `rotate` statement written just before its `part`,
+        each joint's axis and pivot by the same rotation.
+
+        Factories build facing -Y; this lets one face another way without rewriting its geometry,
+        and keeps the structure on its parts (the mesh calls alone would leave the joints behind).
+        Quarter turns only, applied to joints as an exact matrix of 0 and +-1, so axes stay unit
+        vectors with no 1e-16 residues.
+        """
+        k = quarter_turns % 4
+        if k == 0:
+            return
+        c, s = ((1, 0), (0, 1), (-1, 0), (0, -1))[k]
+
+        def turned(v: tuple[float, float, float]) -> tuple[float, float, float]:
+            return (float(c * v[0] - s * v[1]) + 0.0, float(s * v[0] + c * v[1]) + 0.0, float(v[2]))  # no -0.0
+
+        angle = (0.0, 90.0, 180.0, -90.0)[k]
+        statements = []
+        for st in self.statements:
+            if st.function == "part":
+                target = self._var("turned")
+                statements.append(Statement(target, "rotate", (
+                    st.args[2], Arg(None, angle, PLAIN), Arg("axis", "z", PLAIN),
+                    Arg("center", (0.0, 0.0, 0.0), POINT))))
+                st = replace(st, args=(st.args[0], st.args[1], Arg(None, Ref(target), PLAIN), *st.args[3:]))
+            statements.append(st)
+        self.statements = statements
+        self.parts = [p if p.joint is None else
+                      replace(p, joint=replace(p.joint, axis=turned(p.joint.axis), pivot=turned(p.joint.pivot)))
+                      for p in self.parts]
+
     # ---- output ----
     def _readable_names(self) -> dict[str, str]:
         """The mesh each part names is called after the part (`door_3`), the rest keep `box2`."""
