@@ -24,9 +24,10 @@ from jax3dc.export import cli as export_cli  # noqa: E402
 from jax3dc.physics import cli as physics_cli  # noqa: E402
 from jax3dc.predict import cli as predict_cli  # noqa: E402
 from jax3dc.program import cli as program_cli  # noqa: E402
+from jax3dc.serve import cli as serve_cli  # noqa: E402
 from jax3dc.viewer import cli as viewer_cli  # noqa: E402
 
-CORE_COMMANDS = (program_cli, structure_cli, export_cli, physics_cli, predict_cli, edits_cli, viewer_cli)
+CORE_COMMANDS = (program_cli, structure_cli, export_cli, physics_cli, predict_cli, edits_cli, viewer_cli, serve_cli)
 COMMAND_GROUP = "jax3dc.commands"  # entry-point group of the commands of the packages above the core
 
 
