@@ -9,7 +9,7 @@ matched without case.
 
 from __future__ import annotations
 
-MOUNTED_CATEGORIES = frozenset({"faucet", "toilet", "door", "window", "sliding_window", "switch"})
+MOUNTED_CATEGORIES = frozenset({"faucet", "toilet", "door", "window", "sliding_window", "toggle_faucet_lever", "switch"})
 
 
 def is_mounted(category: str | None) -> bool:

@@ -655,6 +655,79 @@ def _keyboard_tray(w: ProgramWriter, top: int, x0: float, x1: float, z_top: floa
                                   (0.0, round(0.7 * bd, 4))))
 
 
+# ---------------------------------------------------------------- faucet with a toggle lever or two handles
+TOGGLE_FAUCET_LEVER = Schema("toggle_faucet_lever", (
+    K("style", ("mixer", "two_handle")), K("finish", ("chrome", "brushed nickel", "matte black steel", "brass")),
+    N("column_radius", 0.012, 0.028), N("column_height", 0.08, 0.25), N("reach", 0.08, 0.22), N("rise", 0.04, 0.14),
+    N("lever_length", 0.05, 0.12), N("lift", 0.35, 0.8), N("handle_spread", 0.07, 0.14), N("handle_turn", 1.2, 1.571),
+    B("cross_handles", 0.4), B("swivel_spout", 0.5), N("swivel", 0.6, 1.571), B("simple", 0.4), *FACING))
+
+
+def toggle_faucet_lever(w: ProgramWriter, p: Draws) -> None:
+    """A single-lever mixer whose lever lifts about a horizontal axis at its back (the toggle), or
+    a deck tap with two handles that each turn a quarter turn about their own vertical axis, its
+    spout fixed or swivelling about the column. The spout reaches towards the user (-Y)."""
+    style = p.choice("style")
+    metal = w.material("Metal", p.choice("finish"))
+    rc, height = p.number("column_radius"), p.number("column_height")
+    reach, rise = p.number("reach"), p.number("rise")
+    simple = p.chance("simple")
+    seg = 8 if simple else 20
+    if style == "mixer":
+        base = w.cylinder(rc * 1.6, 0.012, (0.0, 0.0, 0.006), segments=seg)
+        column = w.cylinder(rc, height, (0.0, 0.0, 0.012 + height / 2), segments=seg)
+        top = 0.012 + height
+        body = w.part("body", w.combine(base, column), metal)
+        z_out = 0.012 + 0.6 * height  # the spout leaves the column's front, below the lever
+        spout = w.sweep([(0.0, -rc, z_out), (0.0, -reach, z_out + 0.01), (0.0, -reach, z_out - 0.03)],
+                        rc * 0.45, segments=12)
+        w.part("spout", spout, metal, parent=body)
+        hub_r = min(0.012, rc * 0.8)
+        pz = top + hub_r + G
+        length = p.number("lever_length")
+        hub = w.cylinder(hub_r, 2 * hub_r, (0.0, 0.0, pz), "x", segments=seg)
+        arm_t = hub_r
+        arm = w.box((hub_r * 1.4, length, arm_t), (0.0, -length / 2, pz))
+        # + lifts the lever's front end: about -X through the hub, nothing of it behind the pivot
+        w.part("lever", w.combine(hub, arm), metal, parent=body,
+               joint=JointSpec("hinge", (-1.0, 0.0, 0.0), (0.0, 0.0, pz), (0.0, p.number("lift"))))
+        _face(w, p)
+        return
+    spread = p.number("handle_spread")
+    plate_w, plate_d, plate_t = 2 * spread + 0.06, max(0.06, 2 * rc + 0.03), 0.015
+    plate = _block(w, (plate_w, plate_d, plate_t), (0.0, 0.0, plate_t / 2), simple)
+    column = w.cylinder(rc, height, (0.0, 0.0, plate_t + height / 2), segments=seg)
+    top = plate_t + height
+    stem_h, stem_r = 0.035, 0.012
+    stems = [w.cylinder(stem_r, stem_h, (x, 0.0, plate_t + stem_h / 2), segments=seg) for x in (-spread, spread)]
+    body = w.part("body", w.combine(plate, column, *stems), metal)
+    drop = 0.8 * rise
+    path = [(0.0, 0.0, top), (0.0, 0.0, top + rise * 0.6), (0.0, -reach * 0.3, top + rise),
+            (0.0, -reach * 0.8, top + rise * 0.9), (0.0, -reach, top + rise - drop)]
+    spout = w.sweep(path, rc * 0.5, segments=12)
+    joint = None
+    if p.chance("swivel_spout"):
+        swivel = p.number("swivel")
+        joint = JointSpec("hinge", (0.0, 0.0, 1.0), (0.0, 0.0, top), (-swivel, swivel))
+    w.part("spout", spout, metal, parent=body, joint=joint)
+    # a handle's arm stays clear of the column whichever way it turns
+    arm = min(spread - rc - 0.012, 0.06)
+    cross = p.chance("cross_handles")
+    turn = p.number("handle_turn")
+    for x in (-spread, spread):
+        hz = plate_t + stem_h + G
+        hub = w.cylinder(stem_r, 0.02, (x, 0.0, hz + 0.01), segments=seg)
+        if cross:  # four short spokes over the hub
+            spokes = [w.box((2 * arm * 0.6, 0.008, 0.008), (x, 0.0, hz + 0.016)),
+                      w.box((0.008, 2 * arm * 0.6, 0.008), (x, 0.0, hz + 0.016))]
+        else:  # one lever pointing forward
+            spokes = [w.box((0.01, arm, 0.008), (x, -arm / 2, hz + 0.016))]
+        axis = (0.0, 0.0, 1.0) if x < 0 else (0.0, 0.0, -1.0)  # both open by turning their front outwards
+        w.part("handle", w.combine(hub, *spokes), metal, parent=body, twin="handle",
+               joint=JointSpec("hinge", axis, (x, 0.0, hz), (0.0, turn)))
+    _face(w, p)
+
+
 BUILDS: dict[str, tuple[Callable[[ProgramWriter, Draws], None], Schema]] = {
     "button_panel": (button_panel, BUTTON_PANEL),
     "dial_panel": (dial_panel, DIAL_PANEL),
@@ -662,4 +735,5 @@ BUILDS: dict[str, tuple[Callable[[ProgramWriter, Draws], None], Schema]] = {
     "sliding_window": (sliding_window, SLIDING_WINDOW),
     "sliding_door_cabinet": (sliding_door_cabinet, SLIDING_DOOR_CABINET),
     "desk_drawers": (desk_drawers, DESK_DRAWERS),
+    "toggle_faucet_lever": (toggle_faucet_lever, TOGGLE_FAUCET_LEVER),
 }

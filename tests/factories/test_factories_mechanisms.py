@@ -206,3 +206,27 @@ def test_desk_drawers_slide_out_of_the_front():
             doors += 1
         assert 1 <= len(joints_named(obj, "drawer")) <= 4
     assert drawers >= 12 and doors >= 1
+
+
+def test_faucet_levers_lift_and_handles_turn_about_the_vertical():
+    styles = set()
+    for seed in range(10):
+        obj = make("toggle_faucet_lever", seed)
+        d = facing(obj)
+        (spout,) = [p for p, n in obj.names.items() if n == "spout"]
+        (body,) = [p for p, n in obj.names.items() if n == "body"]
+        assert (centre(obj, spout) - centre(obj, body)) @ d > 0, "the spout reaches out of the front"
+        for pid, j in joints_named(obj, "lever", "handle", "spout"):
+            axis = np.asarray(j.axis)
+            assert j.type == "hinge"
+            if obj.names[pid] == "lever":  # the toggle: a horizontal axis across the front, lifting the lever
+                styles.add("mixer")
+                assert abs(axis @ UP) < 1e-9 and abs(axis @ d) < 1e-9
+                before = centre(obj, pid)
+                assert rotated(before, j, j.range[1])[2] > before[2] + 0.01
+            else:  # handles and a swivelling spout turn about the vertical
+                styles.add(obj.names[pid])
+                assert abs(axis @ UP) == pytest.approx(1.0)
+                if obj.names[pid] == "handle":
+                    assert j.range == (0.0, pytest.approx(j.range[1])) and 1.0 < j.range[1] <= math.pi / 2 + 1e-3
+    assert styles >= {"mixer", "handle"}
