@@ -1,5 +1,6 @@
 """Mechanisms that robot-manipulation benchmarks model by hand: button panels, dial panels, levers
-(and handle presses, vertical sliders), sliding windows, sliding-door cabinets, desks with drawers.
+(and handle presses, vertical sliders), sliding windows, sliding-door cabinets, desks with drawers,
+faucets with a toggle lever or two turning handles.
 
 Benchmarks (robosuite, ManiSkill, RoboCasa, CALVIN, LIBERO, Meta-World-style scenes) write these
 in MJCF/URDF, often as bare boxes and often with the working face along +X. So each factory varies
