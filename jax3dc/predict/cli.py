@@ -45,11 +45,11 @@ model the physics check judges, its root free unless mounted),
 object.usda, object.glb, object_blender.py, physics.json, report.html, report.png, viewer.html (the object in 3D
 with a slider per joint; open it again with `jax3dc view DIR`), prediction.json (what `jax3dc edit DIR`
 rewrites the files from after a joint is fixed by hand) (and parameters.txt and program.txt
-for the parameters backend, program.txt for the code backend, structure_raw.txt when the model's
-JSON is invalid), prompt.txt (the structure model's prompt).
-A bad input stops with one error line; the outputs written before it are kept. The parameters and
-code backends first refuse an image too small (under 32 px a side) or with no object in it (one
-flat colour, or noise).
+for the parameters backend, program.txt for the code backend, slots.json for the slots backend,
+structure_raw.txt when the model's JSON is invalid), prompt.txt (the structure model's prompt).
+A bad input stops with one error line; the outputs written before it are kept. The parameters,
+code and slots backends first refuse an image too small (under 32 px a side) or with no object in
+it (one flat colour, or noise).
 """
 
 CAMERA_HELP = ("JSON file with the image's camera in the normalised object frame (centre at the origin, "
@@ -66,7 +66,8 @@ def predict_config(args: argparse.Namespace) -> PredictConfig:
     from jax3dc.predict.pipeline import PredictConfig
 
     camera = load_camera(args.camera) if args.camera else None
-    stage1 = Stage1Config(args.stage1, args.stage1_model, args.code_model, args.mesh_up)
+    stage1 = Stage1Config(args.stage1, args.stage1_model, args.code_model, args.mesh_up,
+                          slots_model_dir=args.slots_model)
     return PredictConfig(stage1, args.structure_model, decoding=decoding_from_args(args), camera=camera,
                          scale=args.scale, mounted=args.mounted, num_joints=args.joints,
                          max_image_pixels=args.max_image_pixels)
@@ -143,6 +144,9 @@ def add_predict_options(p: argparse.ArgumentParser) -> None:
                         "folder; default: jax3dc/release/stage1 when it ships)")
     p.add_argument("--code-model", metavar="DIR",
                    help="stage-1 code-model checkpoint folder (needed for --stage1 code)")
+    p.add_argument("--slots-model", metavar="DIR",
+                   help="slots-network folder for --stage1 slots (slots_net.json + model.safetensors, as "
+                        "recipes/stage1_slots.py packages it)")
     p.add_argument("--camera", metavar="FILE", help=CAMERA_HELP)
     p.add_argument("--scale", type=float, metavar="M_PER_NU",
                    help="metres per normalised unit for the exports (default: the mesh file's units, "

@@ -2,7 +2,7 @@
 
 Where the parts come from is a backend, chosen by name (``--stage1 NAME`` or ``NAME:ARG``) from
 ``BACKENDS``: each is a callable ``(Stage1Image, Stage1Settings) -> Stage1``, so a model that
-writes parts directly plugs in with ``register_backend`` beside the four built in:
+writes parts directly plugs in with ``register_backend`` beside the five built in:
 * ``parameters``: a stage-1 model reads the image and writes a factory's category and parameters
   (``jax3dc.parameters``, one line); the factory runs them into parts with ids 1..N, semantic
   names and a metric scale (``jax3dc.factories.run_parameters``). The default when a stage-1 model
@@ -13,7 +13,10 @@ writes parts directly plugs in with ``register_backend`` beside the four built i
 * ``mesh:FILE``: a part-segmented mesh from any tool (see :mod:`jax3dc.predict.mesh_input`);
 * ``parts:DIR``: ground-truth parts, a folder of ``<id>.obj`` (``.stl``, ``.ply``, ``.glb``) as
   ``jax3dc.geometry.parts`` writes it (a dataset object's parts, or a previous prediction's
-  ``parts/``): stage 2 alone, for evaluation.
+  ``parts/``): stage 2 alone, for evaluation;
+* ``slots``: the slots network (``jax3dc.stage1_slots``, ``--slots-model DIR``) reads the image and
+  writes the object's parts as boxes with generic kinds, whatever the category (issue 64): one box
+  mesh per kept slot, named by its kind; slots.json keeps what it wrote (boxes, kinds, parents).
 
 A backend that reads the image (``reads_image``) is handed only an image that can hold an object
 (``check_object_image``): a model asked about a blank or a noise image still answers (its grammar
@@ -29,6 +32,7 @@ only when a backend loads one.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
@@ -39,7 +43,7 @@ from PIL import Image
 from scipy.ndimage import maximum_filter, minimum_filter
 
 from jax3dc.decoding import Decoding
-from jax3dc.errors import InputFileError, ProgramError
+from jax3dc.errors import InputFileError, Jax3dcError, ProgramError
 from jax3dc.factories.registry import SCHEMAS, run_parameters
 from jax3dc.geometry.parts import load_parts, normalise_parts, part_boxes
 from jax3dc.parameters import parse_parameters
@@ -56,6 +60,7 @@ PARAMETERS = "parameters"
 CODE = "code"
 MESH = "mesh"
 PARTS = "parts"
+SLOTS = "slots"
 
 Reader = Callable[[np.ndarray], str]
 """RGB uint8 image (H, W, 3) -> the one-line parameter text, e.g. ``stapler(length=0.31, ...)``."""
@@ -100,6 +105,7 @@ class Stage1Config:
     mesh_up: str = "z"  # the mesh file's up axis: "z" (ours, jax3dc's exports) or "y" (glTF's convention)
     read_parameters: Reader | None = None  # stands in for the stage-1 model (tests; a caller's own model server)
     generate_program: TextModel | None = None  # stands in for the code model: the code prompt -> a part program
+    slots_model_dir: str | Path | None = None  # --slots-model (the slots backend's network folder)
 
 
 @dataclass(frozen=True)
@@ -390,6 +396,39 @@ def _from_parts_dir(image: Stage1Image, settings: Stage1Settings) -> Stage1:
     return stage1_from_parts_dir(settings.argument)
 
 
+_SLOTS_READERS: dict[Path, Callable] = {}  # folder -> reader: a batch of images loads (and compiles) it once
+
+
+def stage1_from_slots(slots: list, where: str) -> Stage1:
+    """Box parts (ids 1..N in slot order, named ``<kind>_<id>``) of a slots network's kept slots
+    (jax3dc.stage1_slots.PartSlot); none kept is a Jax3dcError naming ``where``. A photo gives no
+    metric size, so the object is taken as 1 m across (``--scale`` says otherwise)."""
+    if not slots:
+        raise Jax3dcError(f"{where}: the slots network found no part in the image (no slot reached its exists "
+                          "threshold); slots.json holds what it wrote")
+    parts = {pid: trimesh.creation.box(extents=slot.extent, transform=trimesh.transformations.translation_matrix(
+             slot.centre)) for pid, slot in enumerate(slots, start=1)}
+    normalised, scale = _normalised(parts, where)
+    names = {pid: f"{slot.kind}_{pid}" for pid, slot in enumerate(slots, start=1)}
+    return Stage1(normalised, names, scale, SLOTS, metres_per_nu=1.0)
+
+
+def _from_slots(image: Stage1Image, settings: Stage1Settings) -> Stage1:
+    folder = settings.config.slots_model_dir
+    if folder is None:
+        raise InputFileError("--slots-model", "--stage1 slots needs a slots-network folder (--slots-model DIR, as "
+                                              "recipes/stage1_slots.py packages it)")
+    key = Path(folder).resolve()
+    if key not in _SLOTS_READERS:
+        from jax3dc.stage1_slots import load_slots_reader  # lazy: jax (2 s), see the module docstring
+
+        _SLOTS_READERS[key] = load_slots_reader(folder)
+    slots = _SLOTS_READERS[key](image.rgb)
+    doc = {"slots_model": str(folder), "parts": [{"id": pid, **slot.to_dict()} for pid, slot in enumerate(slots, 1)]}
+    settings.write_text("slots", "slots.json", json.dumps(doc, indent=1) + "\n")  # kept when no part is found
+    return stage1_from_slots(slots, image.where)
+
+
 register_backend(Stage1Backend(PARAMETERS, "a stage-1 model (--stage1-model; default: the shipped one) writes a "
                              "factory's parameters, run into parts", _from_parameters, reads_image=True))
 register_backend(Stage1Backend(CODE, "the code model (--code-model) writes a part program, run by the interpreter",
@@ -398,3 +437,5 @@ register_backend(Stage1Backend(MESH, "a part-segmented mesh: a GLB with one node
                                "per part", _from_mesh, argument="FILE"))
 register_backend(Stage1Backend(PARTS, "ground-truth parts, a folder of <id>.obj: stage 2 alone", _from_parts_dir,
                                argument="DIR"))
+register_backend(Stage1Backend(SLOTS, "the slots network (--slots-model) writes the object's parts as boxes with "
+                               "kinds, whatever its category", _from_slots, reads_image=True))

@@ -46,7 +46,7 @@ def test_a_registered_backend_is_listed_in_the_help(factory_backend, capsys):
     assert re.search(rf"^  factory:CATEGORY +{re.escape(SUMMARY)}$", page, re.M)
     for backend in BACKENDS.values():  # each backend on one line of its own
         assert len(re.findall(rf"^  {re.escape(backend.usage)} +\S", page, re.M)) == 1, backend.name
-    assert "--stage1 parameters|code|mesh:FILE|parts:DIR|factory:CATEGORY" in " ".join(page.split())
+    assert "--stage1 parameters|code|mesh:FILE|parts:DIR|slots|factory:CATEGORY" in " ".join(page.split())
 
 
 def test_stage1_runs_a_registered_backend(factory_backend, image, tmp_path, capsys):
@@ -77,4 +77,4 @@ def test_an_unknown_backend_or_a_missing_argument_is_one_line_naming_the_choices
 def test_a_taken_or_malformed_name_is_refused(name):
     with pytest.raises(ValueError):
         register_backend(Stage1Backend(name, "another", lambda image, settings: None))
-    assert [b.name for b in BACKENDS.values()][:4] == ["parameters", "code", "mesh", "parts"]
+    assert [b.name for b in BACKENDS.values()][:5] == ["parameters", "code", "mesh", "parts", "slots"]
