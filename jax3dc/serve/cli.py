@@ -78,7 +78,7 @@ def warn_if_exposed(host: str) -> None:
 def run(args: argparse.Namespace) -> int:
     config = predict_config(args)
     from jax3dc.serve.app import create_app  # lazy: starlette, the exporters and the physics check
-    from jax3dc.serve.jobs import JobBoard  # lazy: as the line above
+    from jax3dc.serve.jobs import RUNNING, JobBoard  # lazy: as the line above
 
     sock = listen(args.host, args.port)
     warn_if_exposed(args.host)
@@ -91,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         run_app(create_app(board, loopback=is_loopback(args.host)), sock, "/", not args.no_open)
     finally:
+        if any(job.state == RUNNING for job in board.all()):  # a prediction cut short would be done again
+            print("letting the running prediction finish (Ctrl-C again quits now)", file=sys.stderr, flush=True)
         board.stop()
     return 0
 
