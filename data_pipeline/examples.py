@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from PIL import Image
 
+from data_pipeline.importers.material_guess import placeholder_spans
 from data_pipeline.packing import Example
 from data_pipeline.record import Record
 from jax3dc.errors import Jax3dcError
@@ -61,6 +62,10 @@ class ExampleEncoder:
     task: str = "structure"
     image_size: int | None = None  # resize I and S to this square side first (S nearest-neighbour)
     pivot_frame: PivotFrame = PivotFrame()  # how the structure target writes joint pivots
+    # Off: the material text an importer writes where its source names no material takes no loss
+    # (material_guess.placeholder_spans): only imported objects have it, so learning it would teach
+    # the model which domain an object comes from, not what it is made of.
+    score_placeholder_materials: bool = False
 
     @property
     def images_per_example(self) -> int:
@@ -81,13 +86,16 @@ class ExampleEncoder:
             out.append(image)
         return out
 
+    def structure_target(self, record: Record) -> str:
+        """The structure task's answer: the record's target with pivots in the run's frame."""
+        try:
+            return target_in_frame(record.target, legend_boxes(record.prompt), self.pivot_frame)
+        except StructureError as e:
+            raise UnusableRecord(f"record {record.key!r}: target is not a valid structure: {e}") from None
+
     def messages(self, record: Record) -> list[dict]:
         if self.task == "structure":
-            try:
-                target = target_in_frame(record.target, legend_boxes(record.prompt), self.pivot_frame)
-            except StructureError as e:
-                raise UnusableRecord(f"record {record.key!r}: target is not a valid structure: {e}") from None
-            return chat_messages(record.prompt, target)
+            return chat_messages(record.prompt, self.structure_target(record))
         if self.task == "parameters":
             if not record.parameters:
                 raise MissingParameters(f"record {record.key!r} has no factory parameters (parameters task)")
@@ -98,7 +106,10 @@ class ExampleEncoder:
 
     def encode(self, record: Record) -> Example:
         messages = self.messages(record)
+        unscored: list[tuple[int, int]] = []
+        if self.task == "structure" and not self.score_placeholder_materials:
+            unscored = placeholder_spans(messages[-1]["content"][0]["text"])  # the answer: the target
         processed = preprocess_images(self.images(record), self.processor)
-        chat = encode_chat(self.tokenizer, messages, processed.image_grid_thw, self.merge)
+        chat = encode_chat(self.tokenizer, messages, processed.image_grid_thw, self.merge, unscored=unscored)
         return Example(record.key, chat.input_ids, chat.labels, processed.pixel_values,
                        np.asarray(processed.image_grid_thw, np.int64))

@@ -67,6 +67,7 @@ class LoaderConfig:
     process_index: int = 0
     process_count: int = 1
     pivot_frame: PivotFrame = PivotFrame()  # how structure targets write joint pivots
+    score_placeholder_materials: bool = False  # see ExampleEncoder
 
 
 @dataclass(frozen=True)
@@ -243,7 +244,8 @@ def build_dataset(cfg: LoaderConfig, model: Qwen3VLConfig, tokenizer: Tokenizer,
         raise LoaderError(f"process {cfg.process_index} of {cfg.process_count}")
     layout = row_layout(cfg, model, tokenizer, processor)
     sources, lengths = zip(*(_source(shard_paths([s], cfg.split), cfg) for s in cfg.sources))
-    decoded = [ds.map(_Decode(ExampleEncoder(tokenizer, processor, layout.merge, task, cfg.image_size, cfg.pivot_frame), cfg.split))
+    decoded = [ds.map(_Decode(ExampleEncoder(tokenizer, processor, layout.merge, task, cfg.image_size, cfg.pivot_frame,
+                                                    cfg.score_placeholder_materials), cfg.split))
                for ds, task in zip(sources, tasks)]
     examples = decoded[0] if len(decoded) == 1 else grain.MapDataset.mix(decoded, list(cfg.weights) or None)
     named = ", ".join(s if len(set(tasks)) == 1 else f"{s} ({t})" for s, t in zip(cfg.sources, tasks))

@@ -61,6 +61,9 @@ class TrainConfig:
     # The exported model folder records it, so generation reads its pivots back the same way.
     pivot_frame: str = ""
     tokenizer: str = ""  # folder with tokenizer.json; empty: the init checkpoint's, else Qwen3's
+    # Score the material text an importer writes for a material its source does not name (off: that
+    # text marks the real domain; data_pipeline.importers.material_guess.placeholder_spans).
+    score_placeholder_materials: bool = False
     pack: int = 6  # examples packed per row at most (1: one padded example per row); ~1.5k tokens each at 448 px
     loader_workers: int = 0  # grain worker processes decoding and packing
     seq_len: int = 8192

@@ -88,5 +88,6 @@ def make_loader(cfg: TrainConfig, model: Qwen3VLConfig, split: str, tokenizer: T
         tasks=cfg.data_tasks if sources == cfg.data else (),
         weights=cfg.data_weights if sources == cfg.data else (), pack=cfg.pack, image_size=cfg.image_size,
         pixel_dtype="bfloat16" if cfg.compute_dtype == "bfloat16" else "float32", seed=cfg.seed, shuffle=train, workers=cfg.loader_workers if train else 0,
-        process_index=jax.process_index(), process_count=jax.process_count(), pivot_frame=run_pivot_frame(cfg))
+        process_index=jax.process_index(), process_count=jax.process_count(), pivot_frame=run_pivot_frame(cfg),
+        score_placeholder_materials=cfg.score_placeholder_materials)
     return ShardLoader.create(loader_cfg, model, tokenizer or run_tokenizer(cfg), processor or run_processor(cfg, model))

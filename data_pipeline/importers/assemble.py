@@ -16,7 +16,7 @@ import trimesh
 
 from data_pipeline.importers.frames import front_to_minus_y
 from data_pipeline.importers.kinematic_tree import KinematicTree, reduce_to_parts
-from data_pipeline.importers.material_guess import DEFAULT_FAMILY, guess_family
+from data_pipeline.importers.material_guess import DEFAULT_FAMILY, GUESSED_DESC, UNKNOWN_DESC, guess_family
 from jax3dc.errors import InputFileError
 from jax3dc.geometry.mesh_size import MAX_COORDINATE
 from jax3dc.geometry.parts import part_boxes
@@ -90,8 +90,7 @@ def assemble(
         parent = None if attachment.parent is None else ids[attachment.parent]
         nodes[ids[link]] = Node(parent, material, joint, source.label or source.name)
     materials = {
-        index: Material(family, "default: no material named in the source" if family == DEFAULT_FAMILY
-                        else f"guessed from part names ({family.lower()})")
+        index: Material(family, UNKNOWN_DESC if family == DEFAULT_FAMILY else GUESSED_DESC.format(family.lower()))
         for family, index in families.items()
     }
     structure = finish_structure(Structure(materials, nodes, ()), parts, boxes)

@@ -24,6 +24,26 @@ KEYWORDS: dict[str, tuple[str, ...]] = {
     "Plastic": ("plastic",),
 }
 DEFAULT_FAMILY = "Other"
+# What an imported material says when its source names none: text of our own, not a fact about the
+# object, and written only for imported objects, so a model that learns it learns which domain an
+# object comes from. Training leaves it unscored (``placeholder_spans``).
+UNKNOWN_DESC = "default: no material named in the source"
+GUESSED_DESC = "guessed from part names ({})"
+_VALUE = r'"{key}"\s*:\s*"({value})"'
+_PLACEHOLDERS = re.compile(
+    _VALUE.format(key="family", value=re.escape(DEFAULT_FAMILY)) + r"\s*,\s*"
+    + _VALUE.format(key="desc", value=re.escape(UNKNOWN_DESC))
+    + "|" + _VALUE.format(key="desc", value=re.escape(GUESSED_DESC).replace(r"\{\}", "[a-z]+")))
+
+
+def placeholder_spans(target_json: str) -> list[tuple[int, int]]:
+    """Character spans of ``target_json`` (a structure's JSON text) that an importer wrote in place
+    of a material it does not know: the description of every placeholder material, and its family
+    when that is only the default. Empty for factory objects."""
+    spans = []
+    for m in _PLACEHOLDERS.finditer(target_json):
+        spans += [m.span(g) for g in range(1, 4) if m.group(g) is not None]
+    return spans
 
 
 def family_of_name(name: str) -> str | None:

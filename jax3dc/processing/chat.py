@@ -122,11 +122,14 @@ def encode_chat(
     image_grid_thw: np.ndarray | Sequence[Sequence[int]] | None = None,
     merge_size: int = 2,
     add_generation_prompt: bool = False,
+    unscored: Sequence[tuple[int, int]] = (),
 ) -> EncodedChat:
     """Tokenise a conversation; labels are the ids inside assistant spans, IGNORE_INDEX elsewhere.
 
     A token belongs to a span when it starts inside it. Special tokens split the text, so the
-    ``\\n`` after ``assistant`` never fuses with the answer's first token.
+    ``\\n`` after ``assistant`` never fuses with the answer's first token. ``unscored``: character
+    spans of the last assistant answer whose tokens take no loss either (text a source wrote in
+    place of a fact it does not know, which a model must not learn to repeat).
     """
     counts = image_token_counts(image_grid_thw, merge_size) if image_grid_thw is not None else []
     text, spans = render_chat(messages, counts, add_generation_prompt)
@@ -136,5 +139,13 @@ def encode_chat(
     in_span = np.zeros(len(ids), dtype=bool)
     for lo, hi in spans:
         in_span |= (starts >= lo) & (starts < hi)
+    if unscored:
+        if not spans:
+            raise ValueError("unscored spans given for a conversation without an assistant answer")
+        answer = spans[-1][0]
+        for lo, hi in unscored:
+            if not 0 <= lo <= hi <= spans[-1][1] - len(IM_END) - answer:
+                raise ValueError(f"unscored span ({lo}, {hi}) lies outside the answer")
+            in_span &= ~((starts >= answer + lo) & (starts < answer + hi))
     labels = np.where(in_span, input_ids, IGNORE_INDEX).astype(np.int32)
     return EncodedChat(input_ids=input_ids, labels=labels)
