@@ -13,8 +13,11 @@ Then, with the shipped models and default options:
      before it stops.
   2. N separate `jax3dc predict IMAGE --out DIR` processes, one after the other, one image each:
      each starts Python and loads the models again.
-The ratio is the second's seconds per image over the first's; the bench also counts the images
-whose structure.json is the same byte for byte both ways (greedy decoding: all of them).
+The ratio is the second's seconds per image over the first's. On a machine shared with other work
+the load may differ between the two halves, so the CPU seconds per image (user + system, of the
+server process and of the predict processes: contention changes them far less than wall time)
+and their ratio are printed too. The bench also counts the images whose structure.json is the
+same byte for byte both ways (greedy decoding: all of them).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import json
 import os
 import platform
 import re
+import resource
 import signal
 import subprocess
 import sys
@@ -84,6 +88,17 @@ def peak_memory_mb(pid: int) -> float:
     return int(re.search(r"VmHWM:\s+(\d+) kB", status).group(1)) / 1024
 
 
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of the process and its waited-for children so far (/proc/PID/stat)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return sum(int(v) for v in fields[11:15]) / os.sysconf("SC_CLK_TCK")
+
+
+def children_cpu_seconds() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def through_server(images: list[Path], out: Path) -> dict:
     """Seconds per image through `jax3dc serve`, the order the jobs ran in and the server's memory peak."""
     start = time.perf_counter()
@@ -103,6 +118,7 @@ def through_server(images: list[Path], out: Path) -> dict:
             time.sleep(POLL_S)
         seconds = time.perf_counter() - start
         memory = peak_memory_mb(server.pid)
+        cpu = cpu_seconds(server.pid)
     finally:
         server.send_signal(signal.SIGINT)
         try:
@@ -110,19 +126,19 @@ def through_server(images: list[Path], out: Path) -> dict:
         except subprocess.TimeoutExpired:
             server.kill()
     numbers = [jobs[i]["number"] for i in submitted]
-    return {"seconds": seconds, "memory_mb": memory, "ids": submitted,
+    return {"seconds": seconds, "cpu_seconds": cpu, "memory_mb": memory, "ids": submitted,
             "in_order": numbers == sorted(numbers) and len(set(numbers)) == len(numbers),
             "failed": [i for i in submitted if jobs[i]["state"] != "done"],
             "job_seconds": [jobs[i]["seconds"] for i in submitted]}
 
 
-def one_process_each(images: list[Path], out: Path) -> float:
-    """Seconds for N `jax3dc predict IMAGE --out DIR` processes, one after the other."""
-    start = time.perf_counter()
+def one_process_each(images: list[Path], out: Path) -> tuple[float, float]:
+    """(wall seconds, CPU seconds) of N `jax3dc predict IMAGE --out DIR` processes, one after the other."""
+    start, cpu = time.perf_counter(), children_cpu_seconds()
     for image in images:
         subprocess.run(command("predict", str(image), "--out", str(out / image.stem)), env=child_env(), check=False,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - start
+    return time.perf_counter() - start, children_cpu_seconds() - cpu
 
 
 def started_in_order(out: Path, ids: list[str]) -> bool:
@@ -145,21 +161,27 @@ def main() -> None:
     served = through_server(images, work / "serve")
     per_served = served["seconds"] / len(images)
     in_order = served["in_order"] and started_in_order(work / "serve", served["ids"])
+    cpu_served = served["cpu_seconds"] / len(images)
+    job_seconds = sorted(s for s in served["job_seconds"] if s is not None)
     print(f"jax3dc serve: {served['seconds']:.1f} s for {len(images)} images from the server's start, "
-          f"{per_served:.2f} s per image; in submission order: {in_order}; failed: {len(served['failed'])}; "
+          f"{per_served:.2f} s per image ({cpu_served:.2f} CPU s); a job's median {job_seconds[len(job_seconds) // 2]:.1f} s; "
+          f"in submission order: {in_order}; failed: {len(served['failed'])}; "
           f"server memory peak {served['memory_mb']:.0f} MB", flush=True)
 
-    separate = one_process_each(images, work / "predict")
-    per_process = separate / len(images)
-    print(f"jax3dc predict, one process per image: {separate:.1f} s, {per_process:.2f} s per image", flush=True)
+    separate, separate_cpu = one_process_each(images, work / "predict")
+    per_process, cpu_process = separate / len(images), separate_cpu / len(images)
+    print(f"jax3dc predict, one process per image: {separate:.1f} s, {per_process:.2f} s per image "
+          f"({cpu_process:.2f} CPU s)", flush=True)
     same = sum((work / "serve" / i / "structure.json").is_file()
                and (work / "serve" / i / "structure.json").read_bytes()
                == (work / "predict" / image.stem / "structure.json").read_bytes()
                for i, image in zip(served["ids"], images) if (work / "predict" / image.stem / "structure.json").is_file())
-    print(f"ratio: {per_process / per_served:.2f}x (one process per image / the server); "
-          f"structure.json the same both ways: {same} of {len(images)}")
+    print(f"ratio: {per_process / per_served:.2f}x wall, {cpu_process / cpu_served:.2f}x CPU (one process per image / "
+          f"the server); structure.json the same both ways: {same} of {len(images)}")
     print(json.dumps({"served_s_per_image": round(per_served, 2), "process_s_per_image": round(per_process, 2),
-                      "ratio": round(per_process / per_served, 2), "in_order": in_order,
+                      "ratio": round(per_process / per_served, 2), "served_cpu_s_per_image": round(cpu_served, 2),
+                      "process_cpu_s_per_image": round(cpu_process, 2),
+                      "cpu_ratio": round(cpu_process / cpu_served, 2), "in_order": in_order,
                       "server_peak_mb": round(served["memory_mb"]), "same_structures": same, "images": len(images)}))
 
 
