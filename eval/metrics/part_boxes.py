@@ -106,11 +106,13 @@ def score_part_boxes(key: str, reference: Sequence[np.ndarray], reference_kinds:
 
 def summarise(scores: Sequence[PartBoxScore]) -> dict[str, float | int]:
     """Over objects: mean RS-dgIoU, the share of reference parts matched, the share of predicted
-    parts that are extra, and kind accuracy over matched pairs with a reference kind."""
+    parts that are extra, and kind accuracy over matched pairs with a reference kind beside the
+    counts it is made of (an accuracy of 0.0 over no pair is no measurement)."""
     total = lambda field: sum(getattr(s, field) for s in scores)
     share = lambda a, b: round(a / b, 4) if b else 0.0
     return {"objects": len(scores), "rs_dgiou": round(float(np.mean([s.dgiou for s in scores])), 4) if scores else 0.0,
             "reference_parts": total("reference"), "predicted_parts": total("predicted"),
             "matched": total("matched"), "matched_share": share(total("matched"), total("reference")),
             "extra": total("extra"), "extra_share": share(total("extra"), total("predicted")),
+            "kinds_scored": total("kinds_scored"), "kinds_right": total("kinds_right"),
             "kind_accuracy": share(total("kinds_right"), total("kinds_scored"))}
