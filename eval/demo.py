@@ -151,7 +151,8 @@ def _stage_predict(data: Path, out: Path, count: int) -> dict:
         own.append(entry)
         if structure is not None:
             structures[record.key] = structure
-        pixels.append(predict_record(record, reference, out / f"object_{k}" / "pixels", reader, checkpoints))
+        pixels.append(predict_record(record, reference, out / f"object_{k}" / "pixels",
+                                     Stage1Config(read_parameters=reader), checkpoints))
     rows = {"own parts": evaluate(build_cases(references, structures)).metrics,
             "from pixels": score_pixels(references, pixels).metrics}
     status = "done" if all(e["status"] == "done" for e in own) and not any(p.failure for p in pixels) else "partial"

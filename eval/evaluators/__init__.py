@@ -33,7 +33,8 @@ class Evaluator:
 EVALUATORS: dict[str, Evaluator] = {e.name: e for e in (
     Evaluator("real_objects", "the release benchmark: held-out real objects beside procedural ones, each model "
               "beside the no-training baselines"),
-    Evaluator("pixels_end_to_end", "Table 1 from pixels (stage 1 then stage 2) beside stage 2 on true parts"),
+    Evaluator("pixels_end_to_end", "from pixels per stage-1 backend (factory network, slots): RS-dgIoU, parts "
+              "matched, extra parts, part kinds, joints right beside stage 2 on true parts"),
     Evaluator("physics_ground_truth", "the physics check's false alarms on ground truth and its mutation detection"),
     Evaluator("appearance_shift", "the shipped model on MuJoCo renders against Blender Cycles renders of the same "
               "records"),
