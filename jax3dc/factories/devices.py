@@ -512,9 +512,10 @@ PEN = Schema("pen", (
 
 
 def pen(w: ProgramWriter, p: Draws) -> None:
-    """A pen standing on end along Z, writing tip down (as the pool's pen stands): a click pen
-    whose button slides into the barrel along its axis, or a capped pen whose cap slides off the
-    tip end along the axis; sometimes a pocket clip."""
+    """A pen lying on its side along Y, clip up: a click pen whose button slides into the barrel
+    along its axis, or a capped pen whose cap slides off the tip end along the axis; sometimes a
+    pocket clip. Built standing along Z, writing tip down, then laid down: the pool's one pen
+    stands so, but a pen on end falls over, and the physics check asks that it rest as left."""
     length, r = p.number("length"), p.number("radius")
     click = p.chance("click")
     barrel_mat, part_mat = _material(w, p, "barrel_is_metal"), kit.plastic(w, p, "part_plastic")
@@ -548,6 +549,7 @@ def pen(w: ProgramWriter, p: Draws) -> None:
         clip = w.box((0.003, 0.0015, 0.03), (0.0, r + 0.0018, clip_top - 0.015))
         w.part("clip", w.combine(clip, w.box((0.003, 0.002, 0.003), (0.0, r + 0.0006, clip_top - 0.0015))), part_mat,
                parent=holder)
+    w.turn(1, "x")  # +Z (the pen) onto -Y, the clip's +Y side up
 
 
 SCISSORS = Schema("scissors", (

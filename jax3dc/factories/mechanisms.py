@@ -12,7 +12,7 @@ the rendering camera stays in the front hemisphere around -Y (jax3dc.render.samp
 MJCF/URDF imports keep their source frame unless told otherwise (only PartNet-Mobility is turned,
 data_pipeline.importers.source.default_front), so a benchmark object whose mechanism looks along
 +X arrives seen from its side. Training must show such objects, with joint axes and pivots turned
-with the geometry (ProgramWriter.turn_about_z). About half face -Y, the usual case; the other half
+with the geometry (ProgramWriter.turn). About half face -Y, the usual case; the other half
 share +X, -X and +Y equally (+Y, its back to the camera, teaches that hidden mechanisms exist).
 -Y is `turned = 0` rather than an option of `facing`, so each object has one record (the stage-1
 target): a `facing` left unread keeps its default.
@@ -38,7 +38,7 @@ G = kit.EPS
 def _face(w: ProgramWriter, p: Draws) -> str:
     """Turns the finished object so its working face looks along the drawn direction; returns it."""
     facing = p.choice("facing") if p.chance("turned") else "-y"
-    w.turn_about_z(QUARTER_TURNS[facing])
+    w.turn(QUARTER_TURNS[facing])
     return facing
 
 

@@ -225,23 +225,28 @@ class ProgramWriter:
         return self.call("scale", Arg(None, mesh, PLAIN), Arg(None, tuple(factor), PLAIN),
                          Arg("center", tuple(center), POINT))
 
-    def turn_about_z(self, quarter_turns: int) -> None:
-        """Turns everything written so far by `quarter_turns` x 90 degrees about +Z through the
-        metric origin: each part's mesh by a `rotate` statement written just before its `part`,
-        each joint's axis and pivot by the same rotation.
+    def turn(self, quarter_turns: int, axis: str = "z") -> None:
+        """Turns everything written so far by `quarter_turns` x 90 degrees about +X, +Y or +Z
+        through the metric origin: each part's mesh by a `rotate` statement written just before
+        its `part`, each joint's axis and pivot by the same rotation.
 
-        Factories build facing -Y; this lets one face another way without rewriting its geometry,
-        and keeps the structure on its parts (the mesh calls alone would leave the joints behind).
-        Quarter turns only, applied to joints as an exact matrix of 0 and +-1, so axes stay unit
-        vectors with no 1e-16 residues.
+        Factories build in one pose (facing -Y, standing); this lets one face another way or lie
+        down without rewriting its geometry, and keeps the structure on its parts (the mesh calls
+        alone would leave the joints behind). Quarter turns only, applied to joints as an exact
+        matrix of 0 and +-1, so axes stay unit vectors with no 1e-16 residues.
         """
         k = quarter_turns % 4
         if k == 0:
             return
+        if axis not in ("x", "y", "z"):
+            raise ValueError(f"turn axis must be x, y or z, not {axis!r}")
         c, s = ((1, 0), (0, 1), (-1, 0), (0, -1))[k]
+        a, b = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]  # the plane turned, in the right-hand order
 
         def turned(v: tuple[float, float, float]) -> tuple[float, float, float]:
-            return (float(c * v[0] - s * v[1]) + 0.0, float(s * v[0] + c * v[1]) + 0.0, float(v[2]))  # no -0.0
+            out = [float(x) for x in v]
+            out[a], out[b] = float(c * v[a] - s * v[b]), float(s * v[a] + c * v[b])
+            return tuple(x + 0.0 for x in out)  # no -0.0
 
         angle = (0.0, 90.0, 180.0, -90.0)[k]
         statements = []
@@ -249,7 +254,7 @@ class ProgramWriter:
             if st.function == "part":
                 target = self._var("turned")
                 statements.append(Statement(target, "rotate", (
-                    st.args[2], Arg(None, angle, PLAIN), Arg("axis", "z", PLAIN),
+                    st.args[2], Arg(None, angle, PLAIN), Arg("axis", axis, PLAIN),
                     Arg("center", (0.0, 0.0, 0.0), POINT))))
                 st = replace(st, args=(st.args[0], st.args[1], Arg(None, Ref(target), PLAIN), *st.args[3:]))
             statements.append(st)

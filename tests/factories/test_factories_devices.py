@@ -170,7 +170,9 @@ def test_pen_parts_move_along_the_pen():
         moving = parts_named(obj, "button", "cap")
         assert len(moving) == 1
         ((_, joint),) = moving
-        assert joint.type == "slide" and parallel(joint.axis, long_axis) and parallel(long_axis, (0, 0, 1))
+        assert joint.type == "slide" and parallel(joint.axis, long_axis) and parallel(long_axis, (0, 1, 0))
+        clips = [m for pid, m in obj.parts.items() if obj.names[pid] == "clip"]
+        assert all(m.bounds[1][2] > body.bounds[1][2] for m in clips)  # laid down clip up: it rests on its barrel
 
 
 def test_scissors_hinge_about_the_normal_of_their_blades():
