@@ -66,7 +66,10 @@ def run_app(app, sock: socket.socket, path: str, open_browser: bool) -> None:
     print(f"serving at {url} (Ctrl-C stops)", flush=True)
     if open_browser:
         webbrowser.open(url)
-    uvicorn.Server(uvicorn.Config(app, log_level="warning", access_log=False)).run(sockets=[sock])
+    try:
+        uvicorn.Server(uvicorn.Config(app, log_level="warning", access_log=False)).run(sockets=[sock])
+    except KeyboardInterrupt:  # uvicorn shuts down on Ctrl-C, then raises it again: a server's normal way out
+        print("stopped", flush=True)
 
 
 def warn_if_exposed(host: str) -> None:
