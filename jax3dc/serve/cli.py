@@ -16,7 +16,7 @@ from jax3dc.predict.cli import add_predict_options, predict_config
 DEFAULT_PORT = 8000
 
 DESCRIPTION = """\
-A local web app: drop photos (or pick several files) in the page; each is predicted in turn, with
+A local web app: drop photos in the page (or pick files, or a folder); each is predicted in turn, with
 the models loaded once, into its own folder of --out (as `jax3dc predict IMG... --out DIR` names
 them, with DIR/index.html of all of them). A finished one opens in the viewer with its physics
 verdict and a form per joint: type, axis, hinge line and range; applying it is `jax3dc edit` (the

@@ -1,5 +1,6 @@
 """`jax3dc serve` in headless Chromium (Debian's, driven by Playwright as the viewer's tests are):
 a photo set on the page's file input is predicted and opens in the viewer with its verdict;
+a folder picked in it sends its images;
 moving the left door's hinge to its other edge in the edit form changes the verdict and the
 exported MJCF; the zip downloaded with one click loads in MuJoCo and its URDF in yourdfpy.
 
@@ -104,5 +105,13 @@ def test_drop_a_photo_fix_a_hinge_and_download_the_zip(server, browser, inputs, 
     assert len(urdf.actuated_joints) == 2
     for name in ("object.usda", "object.glb", "object_blender.py", "structure.json", "physics.json"):
         assert (got / name).is_file(), name
+
+    photos = tmp_path / "photos"  # a folder picked: its images go, its other files are left out
+    photos.mkdir()
+    (photos / "second.png").write_bytes(inputs[1].read_bytes())
+    (photos / "notes.txt").write_text("not an image")
+    page.set_input_files("#folder", str(photos))
+    page.wait_for_selector('#jobs li[data-job="second"][data-state=done]', timeout=60_000)
+    assert [job.id for job in board.all()] == ["cabinet", "second"]
     assert errors == []
     assert all(r.startswith(url) or r.startswith(("data:", "blob:", "about:")) for r in requests), requests

@@ -217,6 +217,13 @@ function dropArea() {
   }
   drop.addEventListener("drop", (e) => { e.preventDefault(); upload([...e.dataTransfer.files]); });
   $("files").addEventListener("change", (e) => { upload([...e.target.files]); e.target.value = ""; });
+  $("folder").addEventListener("change", (e) => {  // a folder's image files, by name as the batch command orders them
+    const images = [...e.target.files].filter((f) => f.type.startsWith("image/"));
+    images.sort((a, b) => (a.webkitRelativePath < b.webkitRelativePath ? -1 : 1));
+    if (!images.length) say("message", "no image files in that folder", true);
+    upload(images);
+    e.target.value = "";
+  });
 }
 
 async function start() {
