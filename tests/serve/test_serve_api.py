@@ -17,11 +17,13 @@ import pytest
 from starlette.testclient import TestClient
 
 from tests.serve.serve_cases import ORIGIN, served_app
+from jax3dc.cli import main
 from jax3dc.edits.staging import folder_lock
 from jax3dc.errors import Jax3dcError
 from jax3dc.serve.cli import is_loopback, listen, warn_if_exposed
 from jax3dc.serve.app import create_app
 from jax3dc.serve.jobs import JobBoard
+from jax3dc.viewer import cli as viewer_cli
 from tests.edits.edit_cases import snapshot
 
 HOSTILE_NAME = "../../<img src=x onerror=alert(1)>.png"
@@ -173,6 +175,14 @@ def test_view_serve_edits_one_folder_and_takes_no_upload(inputs, tmp_path):
     assert refused.status_code == 405 and "jax3dc serve" in refused.json()["error"]
     reply = client.post("/api/jobs/my_object/edit", content=json.dumps(TO_THE_OTHER_EDGE))
     assert reply.status_code == 200 and json.loads((copy / "physics.json").read_text())["ok"] is False
+
+
+def test_view_serve_of_a_predict_folder_serves_the_edit_page(inputs, tmp_path, monkeypatch):
+    served = []
+    monkeypatch.setattr(viewer_cli, "serve_folder", lambda *args: served.append(args))
+    copy = Path(shutil.copytree(inputs[2] / "cabinet", tmp_path / "cabinet"))
+    assert main(["view", str(copy), "--serve", "--port", "0", "--no-open"]) == 0
+    assert served == [(copy, "127.0.0.1", 0, False)]
 
 
 def test_the_command_listens_on_loopback_and_warns_otherwise(capsys):
