@@ -81,7 +81,10 @@ async function refresh() {
   $("jobs").replaceChildren(...state.jobs.map(jobItem));
   // a job that finished since the last look (or was submitted and done in between) opens, once the page has loaded
   const finished = state.loaded && state.jobs.find((j) => j.state === "done" && before.get(j.id) !== "done");
-  if (!state.selected && finished) select(finished.id);
+  if (!state.selected && finished) {
+    say("message", "");  // "queued" is over: the list says where each photo stands
+    select(finished.id);
+  }
   else if (!state.selected && !state.uploads && state.jobs.length) select(state.jobs[0].id);
   const busy = state.jobs.some((j) => j.state === "queued" || j.state === "running");
   if (busy && !state.polling) state.polling = setInterval(() => refresh().catch(() => {}), POLL_MS);
