@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import re
+from dataclasses import replace
 from pathlib import Path
 
 from data_pipeline.importers.assemble import ImportedObject
@@ -55,4 +56,10 @@ def read_imported(path: Path) -> ImportedObject:
         raise InputFileError(path, f"not a readable converted object: {e}") from None
     if not isinstance(meta, dict):
         raise InputFileError(path / "meta.json", "must hold a JSON object")
-    return ImportedObject(structure, parts, part_boxes(parts), meta)
+    names = meta.get("part_names") or {}
+    if not isinstance(names, dict) or not all(isinstance(v, str) for v in names.values()):
+        raise InputFileError(path / "meta.json", "part_names must map part ids to names")
+    # structure.json keeps no names (SPEC §2); the parts' names travel in meta.json, and records
+    # built from the folder must carry them as the source's own records do (stage 1's part kinds)
+    nodes = {pid: replace(node, name=names.get(str(pid), node.name)) for pid, node in structure.nodes.items()}
+    return ImportedObject(replace(structure, nodes=nodes), parts, part_boxes(parts), meta)

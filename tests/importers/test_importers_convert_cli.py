@@ -73,6 +73,7 @@ def test_a_converted_folder_imports_as_its_source(tmp_path):
     (rest, *moved), (rest_c, *moved_c) = records["source"], records["converted"]
     assert (rest_c.image_png, rest_c.seg_png, rest_c.prompt, rest_c.target) == (
         rest.image_png, rest.seg_png, rest.prompt, rest.target)
+    assert rest_c.meta["part_names"] == rest.meta["part_names"] and rest.meta["part_names"]  # stage 1's kinds
     assert len(moved) == len(moved_c) == 1  # moved views: the text's rounding of a pivot may move a pixel
     assert (moved_c[0].key, moved_c[0].seg_png, moved_c[0].target) == (moved[0].key, moved[0].seg_png, moved[0].target)
     changed = np.abs(png_array(moved_c[0].image_png).astype(int) - png_array(moved[0].image_png).astype(int)) > 8
