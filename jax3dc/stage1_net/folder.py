@@ -21,11 +21,10 @@ from pathlib import Path
 from typing import Callable, Mapping
 
 import numpy as np
-import safetensors.numpy
 from flax import nnx
-from safetensors import SafetensorError
 
 from jax3dc.errors import InputFileError, Jax3dcError
+from jax3dc.nnx_weights import load_params, save_params
 from jax3dc.parameters import DECIMALS, Count, Number, Parameters, Schema, format_parameters
 from jax3dc.stage1_net.image import network_image
 from jax3dc.stage1_net.layout import OutputLayout, Slot, classes, schemas_from_json, schemas_to_json
@@ -92,17 +91,11 @@ class Stage1Network:
         return [decode_text(self.layout, self.schemas, cat[i], num[i], disc[i]) for i in range(len(images))]
 
 
-def _tensor_name(path: tuple) -> str:
-    return ".".join(str(p) for p in path)
-
-
 def save_network(folder: str | Path, model: Stage1Net, schemas: Mapping[str, Schema], notes: dict | None = None) -> Path:
     """Writes the folder (created if needed); ``notes`` (e.g. the training recipe) go into the marker."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    tensors = {_tensor_name(path): np.asarray(v[...], np.float16)
-               for path, v in nnx.to_flat_state(nnx.state(model, nnx.Param))}
-    safetensors.numpy.save_file(tensors, str(folder / WEIGHTS))
+    save_params(model, folder / WEIGHTS)
     marker = {"format": FORMAT, "config": model.config.to_json(), "schemas": schemas_to_json(schemas),
               "weights": WEIGHTS, **({"notes": notes} if notes else {})}
     (folder / MARKER).write_text(json.dumps(marker, indent=1) + "\n", encoding="utf-8")
@@ -139,28 +132,7 @@ def load_network(folder: str | Path) -> Stage1Network:
                                   reduced=config.reduced, hidden=config.hidden, blocks=config.blocks) != config:
         raise InputFileError(marker_path, "the config's head sizes do not match its schemas")
     weights = folder / str(marker.get("weights", WEIGHTS))
-    if not weights.is_file():
-        raise InputFileError(str(weights), "missing: the network's weights")
-    try:
-        tensors = safetensors.numpy.load_file(str(weights))
-    except (SafetensorError, OSError, ValueError) as e:
-        raise InputFileError(str(weights), f"not a readable safetensors file ({e})") from None
-    model = nnx.eval_shape(lambda: Stage1Net(config, nnx.Rngs(0)))
-    state = nnx.state(model, nnx.Param)
-    flat = nnx.to_flat_state(state)
-    expected = {_tensor_name(path) for path, _ in flat}
-    extra = sorted(set(tensors) - expected)
-    if extra:
-        raise InputFileError(str(weights), f"unexpected tensor {extra[0]!r} ({len(extra)} in all)")
-    for path, variable in flat:
-        name = _tensor_name(path)
-        if name not in tensors:
-            raise InputFileError(str(weights), f"missing tensor {name!r}")
-        if tensors[name].shape != variable.shape:
-            raise InputFileError(str(weights), f"tensor {name!r} has shape {tensors[name].shape}, "
-                                               f"the config needs {variable.shape}")
-        variable.set_value(np.asarray(tensors[name], np.float32))
-    nnx.update(model, nnx.from_flat_state(flat))
+    model = load_params(nnx.eval_shape(lambda: Stage1Net(config, nnx.Rngs(0))), weights)
     return Stage1Network(model, schemas, layout)
 
 

@@ -14,11 +14,10 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
-import safetensors.numpy
 from flax import nnx
-from safetensors import SafetensorError
 
 from jax3dc.errors import InputFileError
+from jax3dc.nnx_weights import load_params, save_params
 from jax3dc.stage1_net.image import network_image
 from jax3dc.stage1_slots.decode import PartSlot, decode_slots
 from jax3dc.stage1_slots.kinds import KINDS
@@ -43,10 +42,6 @@ class SlotsNetwork:
         return [decode_slots(*(x[i] for x in outputs), threshold=self.threshold) for i in range(len(images))]
 
 
-def _tensor_name(path: tuple) -> str:
-    return ".".join(str(p) for p in path)
-
-
 def _card(model: SlotsNet, notes: dict, weights_bytes: int) -> str:
     c = model.config
     lines = [
@@ -68,9 +63,7 @@ def save_slots(folder: str | Path, model: SlotsNet, notes: dict | None = None) -
     marker and the model card."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    tensors = {_tensor_name(path): np.asarray(v[...], np.float16)
-               for path, v in nnx.to_flat_state(nnx.state(model, nnx.Param))}
-    safetensors.numpy.save_file(tensors, str(folder / WEIGHTS))
+    save_params(model, folder / WEIGHTS)
     marker = {"format": FORMAT, "config": model.config.to_json(), "kinds": list(KINDS), "weights": WEIGHTS,
               **({"notes": notes} if notes else {})}
     (folder / MARKER).write_text(json.dumps(marker, indent=1) + "\n", encoding="utf-8")
@@ -104,26 +97,7 @@ def load_slots(folder: str | Path, threshold: float = 0.5) -> SlotsNetwork:
     except (KeyError, TypeError, ValueError) as e:
         raise InputFileError(str(folder / MARKER), f"bad config ({e})") from None
     weights = folder / str(marker.get("weights", WEIGHTS))
-    if not weights.is_file():
-        raise InputFileError(str(weights), "missing: the network's weights")
-    try:
-        tensors = safetensors.numpy.load_file(str(weights))
-    except (SafetensorError, OSError, ValueError) as e:
-        raise InputFileError(str(weights), f"not a readable safetensors file ({e})") from None
-    model = nnx.eval_shape(lambda: SlotsNet(config, nnx.Rngs(0)))
-    flat = nnx.to_flat_state(nnx.state(model, nnx.Param))
-    extra = sorted(set(tensors) - {_tensor_name(path) for path, _ in flat})
-    if extra:
-        raise InputFileError(str(weights), f"unexpected tensor {extra[0]!r} ({len(extra)} in all)")
-    for path, variable in flat:
-        name = _tensor_name(path)
-        if name not in tensors:
-            raise InputFileError(str(weights), f"missing tensor {name!r}")
-        if tensors[name].shape != variable.shape:
-            raise InputFileError(str(weights), f"tensor {name!r} has shape {tensors[name].shape}, "
-                                               f"the config needs {variable.shape}")
-        variable.set_value(np.asarray(tensors[name], np.float32))
-    nnx.update(model, nnx.from_flat_state(flat))
+    model = load_params(nnx.eval_shape(lambda: SlotsNet(config, nnx.Rngs(0))), weights)
     return SlotsNetwork(model, threshold)
 
 
